@@ -1,0 +1,161 @@
+#include "api/gltf_export.h"
+
+#include <tiny_gltf.h>
+
+#include <cstring>
+#include <sstream>
+
+#include "engine/errors.h"
+
+namespace featureline {
+namespace {
+
+// Appends raw bytes to the single buffer, 4-byte aligned as glTF requires for accessors.
+int add_view(tinygltf::Model& model, const void* data, std::size_t bytes, int target) {
+  auto& buffer = model.buffers[0].data;
+  while (buffer.size() % 4 != 0) buffer.push_back(0);
+  tinygltf::BufferView view;
+  view.buffer = 0;
+  view.byteOffset = buffer.size();
+  view.byteLength = bytes;
+  if (target != 0) view.target = target;
+  const auto* p = static_cast<const unsigned char*>(data);
+  buffer.insert(buffer.end(), p, p + bytes);
+  model.bufferViews.push_back(view);
+  return int(model.bufferViews.size() - 1);
+}
+
+int add_accessor(tinygltf::Model& model, int view, int component, int type, std::size_t count, bool normalized = false,
+                 std::vector<double> min = {}, std::vector<double> max = {}) {
+  tinygltf::Accessor a;
+  a.bufferView = view;
+  a.componentType = component;
+  a.type = type;
+  a.count = count;
+  a.normalized = normalized;
+  a.minValues = std::move(min);
+  a.maxValues = std::move(max);
+  model.accessors.push_back(a);
+  return int(model.accessors.size() - 1);
+}
+
+int add_positions(tinygltf::Model& model, const std::vector<Eigen::Vector3d>& points) {
+  std::vector<float> data;
+  data.reserve(points.size() * 3);
+  std::vector<double> lo(3, HUGE_VAL), hi(3, -HUGE_VAL);
+  for (const auto& p : points)
+    for (int k = 0; k < 3; ++k) {
+      const float f = float(p[k]);
+      data.push_back(f);
+      lo[k] = std::min(lo[k], double(f));
+      hi[k] = std::max(hi[k], double(f));
+    }
+  const int view = add_view(model, data.data(), data.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
+  return add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, points.size(), false, lo, hi);
+}
+
+void add_line(tinygltf::Model& model, tinygltf::Mesh& mesh, const std::vector<Eigen::Vector3d>& points, bool closed,
+              const std::array<unsigned char, 4>& rgba) {
+  if (points.size() < 2) return;
+  tinygltf::Primitive primitive;
+  primitive.mode = closed ? TINYGLTF_MODE_LINE_LOOP : TINYGLTF_MODE_LINE_STRIP;
+  primitive.attributes["POSITION"] = add_positions(model, points);
+  std::vector<unsigned char> colours;
+  for (std::size_t i = 0; i < points.size(); ++i) colours.insert(colours.end(), rgba.begin(), rgba.end());
+  const int view = add_view(model, colours.data(), colours.size(), TINYGLTF_TARGET_ARRAY_BUFFER);
+  primitive.attributes["COLOR_0"] =
+      add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_TYPE_VEC4, points.size(), true);
+  mesh.primitives.push_back(primitive);
+}
+
+tinygltf::Model build_model(const PreparedMesh& pm, const std::vector<FeatureLineResult>& results, bool include_mesh) {
+  tinygltf::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "featureline";
+  model.buffers.emplace_back();
+  tinygltf::Scene scene;
+
+  if (include_mesh) {
+    tinygltf::Mesh mesh;
+    mesh.name = "surface";
+    tinygltf::Primitive primitive;
+    primitive.mode = TINYGLTF_MODE_TRIANGLES;
+    primitive.attributes["POSITION"] = add_positions(model, pm.positions);
+    std::vector<float> normals, curvature;
+    for (std::size_t v = 0; v < pm.n_vertices(); ++v) {
+      Eigen::Vector3d n = pm.vertex_normals[v];
+      if (!(n.norm() > 0.5)) n = Eigen::Vector3d(0, 0, 1);  // isolated vertices still need a unit normal
+      for (int k = 0; k < 3; ++k) normals.push_back(float(n[k]));
+      curvature.push_back(float(pm.mean_curvature[v]));
+    }
+    int view = add_view(model, normals.data(), normals.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
+    primitive.attributes["NORMAL"] = add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, pm.n_vertices());
+    view = add_view(model, curvature.data(), curvature.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
+    primitive.attributes["_CURVATURE"] =
+        add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, pm.n_vertices());
+    std::vector<std::uint32_t> indices;
+    indices.reserve(pm.triangles.size() * 3);
+    for (const auto& t : pm.triangles) indices.insert(indices.end(), t.begin(), t.end());
+    view = add_view(model, indices.data(), indices.size() * sizeof(std::uint32_t), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    primitive.indices =
+        add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, indices.size());
+    tinygltf::Material material;
+    material.name = "surface";
+    material.pbrMetallicRoughness.baseColorFactor = {0.8, 0.8, 0.8, 1.0};
+    material.pbrMetallicRoughness.metallicFactor = 0.0;
+    material.pbrMetallicRoughness.roughnessFactor = 0.8;
+    material.doubleSided = true;
+    model.materials.push_back(material);
+    primitive.material = 0;
+    mesh.primitives.push_back(primitive);
+    model.meshes.push_back(mesh);
+    tinygltf::Node node;
+    node.name = "surface";
+    node.mesh = int(model.meshes.size() - 1);
+    model.nodes.push_back(node);
+    scene.nodes.push_back(int(model.nodes.size() - 1));
+  }
+
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const auto& r = results[i];
+    tinygltf::Mesh mesh;
+    mesh.name = "feature_line_" + std::to_string(i);
+    add_line(model, mesh, r.initial_points, r.closed, {255, 96, 0, 255});
+    std::vector<Eigen::Vector3d> refined;
+    for (const auto& p : r.refined) refined.push_back(p.position);
+    add_line(model, mesh, refined, r.closed, {0, 200, 255, 255});
+    if (mesh.primitives.empty()) continue;
+    model.meshes.push_back(mesh);
+    tinygltf::Node node;
+    node.name = mesh.name;
+    node.mesh = int(model.meshes.size() - 1);
+    model.nodes.push_back(node);
+    scene.nodes.push_back(int(model.nodes.size() - 1));
+  }
+  if (model.buffers[0].data.empty()) throw InvalidInputError("nothing to write: no mesh and no line");
+  model.buffers[0].data.resize((model.buffers[0].data.size() + 3) / 4 * 4, 0);
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+  return model;
+}
+
+std::string write(const tinygltf::Model& model, bool binary) {
+  tinygltf::TinyGLTF writer;
+  std::ostringstream out;
+  if (!writer.WriteGltfSceneToStream(&model, out, /*prettyPrint=*/!binary, /*writeBinary=*/binary))
+    throw Error("writing glTF failed");
+  return out.str();
+}
+
+}  // namespace
+
+std::string feature_line_to_glb(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& results, bool include_mesh) {
+  return write(build_model(mesh, results, include_mesh), true);
+}
+
+std::string feature_line_to_gltf_json(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& results,
+                                      bool include_mesh) {
+  return write(build_model(mesh, results, include_mesh), false);
+}
+
+}  // namespace featureline

@@ -1,0 +1,132 @@
+#include "engine/feature_line.h"
+
+#include <chrono>
+#include <deque>
+
+#include "engine/errors.h"
+
+namespace featureline {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
+
+struct Piece {
+  std::size_t begin, end;  // indices into the (unrolled) line, both ends pinned
+};
+
+}  // namespace
+
+SurfacePoint surface_point_at_vertex(const PreparedMesh& pm, std::uint32_t v) {
+  SurfacePoint s;
+  s.position = pm.positions[v];
+  const auto f = *pm.mesh.vf_range(TriMesh::VertexHandle(int(v))).begin();
+  s.face = std::uint32_t(f.idx());
+  const auto& t = pm.triangles[s.face];
+  for (int k = 0; k < 3; ++k) s.barycentric[k] = t[k] == v ? 1.0 : 0.0;
+  return s;
+}
+
+double polyline_length(const std::vector<SurfacePoint>& points, bool closed) {
+  double length = 0;
+  for (std::size_t i = 1; i < points.size(); ++i) length += (points[i].position - points[i - 1].position).norm();
+  if (closed && points.size() > 2) length += (points.front().position - points.back().position).norm();
+  return length;
+}
+
+FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineRequest& request) {
+  const auto start = Clock::now();
+  const FeatureLineOptions& options = request.options;
+  if (options.min_piece_edges < 2) throw InvalidInputError("min_piece_edges must be at least 2");
+  FeatureLineResult result;
+  result.keys = request.keys;
+  result.closed = request.closed;
+
+  result.initial = find_initial_line(pm, request.keys, request.closed, options.initial);
+  result.warnings = result.initial.warnings;
+  for (auto v : result.initial.vertices) result.initial_points.push_back(pm.positions[v]);
+  result.timings.initial_ms = ms_since(start);
+
+  // The line unrolled: a closed line repeats its first vertex at the end.
+  std::vector<std::uint32_t> line = result.initial.vertices;
+  std::vector<std::size_t> key_at = result.initial.key_indices;
+  if (request.closed) {
+    line.push_back(line.front());
+    key_at.push_back(line.size() - 1);
+  }
+
+  if (!options.refine || line.size() < 3) {
+    for (std::size_t i = 0; i < result.initial.vertices.size(); ++i)
+      result.refined.push_back(surface_point_at_vertex(pm, result.initial.vertices[i]));
+    result.refined_length = polyline_length(result.refined, request.closed);
+    result.timings.total_ms = ms_since(start);
+    return result;
+  }
+
+  // Pieces between pinned points. A closed line always has at least two pieces: a loop laid
+  // out as one open strip would meet itself at its first key.
+  std::deque<Piece> pieces;
+  if (options.pin_interior_keys) {
+    for (std::size_t k = 0; k + 1 < key_at.size(); ++k) pieces.push_back({key_at[k], key_at[k + 1]});
+  } else if (request.closed) {
+    const std::size_t half = (line.size() - 1) / 2;
+    pieces.push_back({0, half});
+    pieces.push_back({half, line.size() - 1});
+    result.warnings.push_back("the closed line is refined as two halves pinned at its first key and at vertex " +
+                              std::to_string(line[half]) + " opposite it");
+  } else {
+    pieces.push_back({0, line.size() - 1});
+  }
+
+  SnakeOptions snake_options = options.snake;
+  if (snake_options.feature_sign == 0 && options.initial.sign_aware)
+    snake_options.feature_sign = keys_feature_sign(pm, request.keys, options.initial);
+
+  std::vector<SurfacePoint>& refined = result.refined;
+  while (!pieces.empty()) {
+    const Piece piece = pieces.front();
+    pieces.pop_front();
+    const std::vector<std::uint32_t> sub(line.begin() + std::ptrdiff_t(piece.begin), line.begin() + std::ptrdiff_t(piece.end) + 1);
+    std::vector<SurfacePoint> points;
+    if (sub.size() < 3) {
+      // a single edge is already straight on the surface
+      for (auto v : sub) points.push_back(surface_point_at_vertex(pm, v));
+    } else {
+      auto t0 = Clock::now();
+      const FeatureStrip strip = extract_feature_strip(pm, sub, options.strip);
+      result.timings.strip_ms += ms_since(t0);
+      t0 = Clock::now();
+      const FlatStrip flat = flatten_strip(pm, strip, options.strip);
+      result.timings.flatten_ms += ms_since(t0);
+      const std::size_t edges = piece.end - piece.begin;
+      if (flat.flipped_near_line > 0 && edges >= 2 * std::size_t(options.min_piece_edges)) {
+        // Split where the layout folded, keeping both halves at least min_piece_edges long.
+        std::size_t at = piece.begin + flat.worst_flip_line_index;
+        at = std::clamp(at, piece.begin + std::size_t(options.min_piece_edges), piece.end - std::size_t(options.min_piece_edges));
+        pieces.push_front({at, piece.end});
+        pieces.push_front({piece.begin, at});
+        ++result.splits;
+        continue;
+      }
+      if (flat.flipped_near_line > 0)
+        result.warnings.push_back("the strip around line vertices " + std::to_string(sub.front()) + ".." +
+                                  std::to_string(sub.back()) + " folds over when flattened; refined where it is valid");
+      t0 = Clock::now();
+      const SnakeResult snake = refine_with_snake(pm, strip, flat, snake_options);
+      points = map_to_surface(pm, strip, snake.points);
+      result.timings.snake_ms += ms_since(t0);
+      result.iterations += snake.iterations;
+      result.strip_faces += strip.triangles.size();
+      result.refined_by_snake = true;
+    }
+    ++result.pieces;
+    // Pieces meet at pinned vertices: keep the shared point once.
+    refined.insert(refined.end(), points.begin() + (refined.empty() ? 0 : 1), points.end());
+  }
+  if (request.closed && refined.size() > 1) refined.pop_back();  // back at the first key
+  result.refined_length = polyline_length(refined, request.closed);
+  result.timings.total_ms = ms_since(start);
+  return result;
+}
+
+}  // namespace featureline

@@ -1,0 +1,63 @@
+// Stage 2: the feature strip around the initial line and its flattening into the plane
+// (the paper's "Parameterization of feature strip", Eq. 11 and Fig. 5).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "engine/prepared_mesh.h"
+
+namespace featureline {
+
+struct StripOptions {
+  /// Rings of the strip around the line (the paper's k). 0 chooses 2 or 3 from the local mesh
+  /// density: 3 when the line spans at least `dense_line_edges` of its local mean edge length.
+  int rings = 0;
+  int dense_line_edges = 12;
+  /// A flattened triangle whose edge lengths differ from the surface's by more than this
+  /// fraction is left out of the snake's domain. Averaging the placements of a vertex that
+  /// closes many triangles with the line (the centre of a fan, a cone tip) can distort its
+  /// triangles arbitrarily; the snake must not be steered by them.
+  double max_edge_distortion = 0.35;
+};
+
+/// A strip of the mesh around an open line, with its own compact indices.
+struct FeatureStrip {
+  std::vector<std::uint32_t> vertices;                   ///< mesh vertex id of each local vertex
+  std::vector<int> ring;                                 ///< topological distance of each local vertex to the line
+  std::vector<std::array<std::uint32_t, 3>> triangles;   ///< local indices, the mesh's orientation
+  std::vector<std::uint32_t> faces;                      ///< mesh face id of each local triangle
+  /// Neighbouring local triangle across the edge opposite corner k, or -1 at the strip's border.
+  std::vector<std::array<std::int32_t, 3>> triangle_neighbors;
+  std::vector<std::uint32_t> line;                       ///< local indices of the line's vertices, in order
+  int rings = 0;
+  double mean_edge_length = 0;                           ///< over the strip's triangles
+};
+
+/// The k-ring meshes of the line's vertices (faces whose three vertices are all within k rings).
+/// \pre `line` is a simple open path of mesh vertices (consecutive ones adjacent).
+FeatureStrip extract_feature_strip(const PreparedMesh& mesh, const std::vector<std::uint32_t>& line,
+                                   const StripOptions& options = {});
+
+struct FlatStrip {
+  std::vector<Eigen::Vector2d> uv;   ///< plane position of each local vertex (unplaced: NaN)
+  std::vector<char> placed;          ///< whether each local vertex got a position
+  std::vector<char> triangle_valid;  ///< triangle has all corners placed and positive area
+  std::size_t flipped_triangles = 0; ///< placed triangles whose orientation reversed (fold-overs)
+  std::size_t distorted_triangles = 0;  ///< triangles left out for exceeding max_edge_distortion
+  std::size_t flipped_near_line = 0; ///< of those, how many touch the line (these break the snake)
+  std::size_t worst_flip_line_index = 0;  ///< index in `line` nearest a flip, where to split
+};
+
+/// Lays the line out with its edge lengths and turning angles, then places the strip's other
+/// vertices progressively by similar triangles, averaging when several triangles place the
+/// same vertex (Fig. 5). O(strip size).
+FlatStrip flatten_strip(const PreparedMesh& mesh, const FeatureStrip& strip, const StripOptions& options = {});
+
+/// The plane polyline of the line's vertices, turning angles from the surface (exposed for tests).
+std::vector<Eigen::Vector2d> embed_line(const PreparedMesh& mesh, const std::vector<std::uint32_t>& line);
+
+}  // namespace featureline

@@ -1,0 +1,343 @@
+#include "engine/initial_line.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+#include <sstream>
+
+#include "engine/errors.h"
+
+namespace featureline {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+bool is_blocked(const std::vector<std::uint32_t>* blocked, std::uint32_t v) {
+  return blocked != nullptr && std::binary_search(blocked->begin(), blocked->end(), v);
+}
+
+double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+// Per-thread search scratch whose reset is O(1): an entry is valid only when its stamp
+// equals the current generation. Keeps each query's cost proportional to what it visits,
+// not to the mesh size.
+struct SearchScratch {
+  std::vector<double> cost;
+  std::vector<std::uint32_t> parent;
+  std::vector<std::uint32_t> stamp;
+  std::vector<std::uint32_t> closed_stamp;
+  std::uint32_t generation = 0;
+
+  void begin(std::size_t n) {
+    if (stamp.size() < n) {
+      cost.assign(n, 0);
+      parent.assign(n, 0);
+      stamp.assign(n, 0);
+      closed_stamp.assign(n, 0);
+      generation = 0;
+    }
+    if (++generation == 0) {  // wrapped: clear once every 4 billion queries
+      std::fill(stamp.begin(), stamp.end(), 0);
+      std::fill(closed_stamp.begin(), closed_stamp.end(), 0);
+      generation = 1;
+    }
+  }
+  bool seen(std::uint32_t v) const { return stamp[v] == generation; }
+  bool closed(std::uint32_t v) const { return closed_stamp[v] == generation; }
+};
+
+SearchScratch& scratch() {
+  thread_local SearchScratch s;
+  return s;
+}
+
+// Discrete rank scores of the paper: among n candidates the best gets n, the worst 1.
+// Ties share the mean of their ranks, so equal candidates are not ordered arbitrarily.
+void rank_scores(const std::vector<double>& badness, std::vector<double>& score) {
+  const std::size_t n = badness.size();
+  std::vector<std::size_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return badness[a] < badness[b]; });
+  score.assign(n, 0);
+  for (std::size_t i = 0; i < n;) {
+    std::size_t j = i;
+    while (j < n && badness[order[j]] == badness[order[i]]) ++j;
+    // ranks (0-based, best first) i..j-1 map to scores n-i .. n-j+1
+    const double mean_score = double(n) - 0.5 * double(i + j - 1);
+    for (std::size_t k = i; k < j; ++k) score[order[k]] = mean_score;
+    i = j;
+  }
+}
+
+}  // namespace
+
+double keys_feature_sign(const PreparedMesh& mesh, const std::vector<std::uint32_t>& keys, const InitialLineOptions& options) {
+  if (!options.sign_aware) return 0;
+  int positive = 0, negative = 0;
+  for (auto k : keys) {
+    const double h = mesh.mean_curvature[k] / mesh.curvature_scale;
+    if (h > 0.05) ++positive;
+    if (h < -0.05) ++negative;
+  }
+  if (positive == int(keys.size())) return 1;
+  if (negative == int(keys.size())) return -1;
+  return 0;
+}
+
+std::string to_string(InitialMethod method) {
+  switch (method) {
+    case InitialMethod::marching: return "marching";
+    case InitialMethod::feature_path: return "feature-path";
+    case InitialMethod::geodesic: return "geodesic";
+  }
+  return "unknown";
+}
+
+std::optional<InitialMethod> parse_initial_method(const std::string& name) {
+  if (name == "marching") return InitialMethod::marching;
+  if (name == "feature-path" || name == "feature_path") return InitialMethod::feature_path;
+  if (name == "geodesic") return InitialMethod::geodesic;
+  return std::nullopt;
+}
+
+std::string to_string(MarchingCurvatureTerm term) {
+  switch (term) {
+    case MarchingCurvatureTerm::similar_to_current: return "similar-to-current";
+    case MarchingCurvatureTerm::similar_to_end: return "similar-to-end";
+    case MarchingCurvatureTerm::high_magnitude: return "high-magnitude";
+  }
+  return "unknown";
+}
+
+std::optional<MarchingCurvatureTerm> parse_marching_curvature_term(const std::string& name) {
+  if (name == "similar-to-current") return MarchingCurvatureTerm::similar_to_current;
+  if (name == "similar-to-end") return MarchingCurvatureTerm::similar_to_end;
+  if (name == "high-magnitude") return MarchingCurvatureTerm::high_magnitude;
+  return std::nullopt;
+}
+
+double path_length(const PreparedMesh& mesh, const std::vector<std::uint32_t>& path, bool closed) {
+  double length = 0;
+  for (std::size_t i = 1; i < path.size(); ++i) length += (mesh.positions[path[i]] - mesh.positions[path[i - 1]]).norm();
+  if (closed && path.size() > 2) length += (mesh.positions[path.front()] - mesh.positions[path.back()]).norm();
+  return length;
+}
+
+std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
+                                                          const InitialLineOptions& options, std::string* failure,
+                                                          const std::vector<std::uint32_t>* blocked) {
+  auto fail = [&](std::string why) -> std::optional<std::vector<std::uint32_t>> {
+    if (failure != nullptr) *failure = std::move(why);
+    return std::nullopt;
+  };
+  const auto& P = mesh.positions;
+  const Eigen::Vector3d start_to_end = P[to] - P[from];  // V_{s,e}
+  const double edge = mesh.statistics.mean_edge_length;
+  // Termination guard: a sensible line is at most a few times the straight distance (in edges).
+  const std::size_t max_steps = std::size_t(8.0 * start_to_end.norm() / edge) + 64;
+
+  SearchScratch& seen = scratch();
+  seen.begin(mesh.n_vertices());
+  std::vector<std::uint32_t> path{from};
+  seen.stamp[from] = seen.generation;
+  std::vector<std::uint32_t> candidates;
+  std::vector<double> angle_to_goal, angle_to_previous, distance, curvature_badness;
+  std::vector<double> f_o1, f_o2, f_d, f_c;
+  double closest = start_to_end.norm();
+  const double goal_curvature = mesh.mean_curvature[to];
+
+  while (true) {
+    const std::uint32_t current = path.back();
+    const std::uint32_t begin = mesh.neighbor_offsets[current], end = mesh.neighbor_offsets[current + 1];
+    // Step 3: if v_e is in V_a it is v_suc and the search ends.
+    for (auto k = begin; k < end; ++k)
+      if (mesh.neighbors[k] == to) {
+        path.push_back(to);
+        return path;
+      }
+    if (path.size() > max_steps)
+      return fail("marching did not reach the end key within " + std::to_string(max_steps) + " steps");
+    candidates.clear();
+    for (auto k = begin; k < end; ++k) {
+      const auto v = mesh.neighbors[k];
+      if (!seen.seen(v) && !is_blocked(blocked, v)) candidates.push_back(v);
+    }
+    if (candidates.empty()) return fail("marching ran into a dead end (every neighbour already visited)");
+
+    const Eigen::Vector3d previous_direction =
+        path.size() >= 2 ? Eigen::Vector3d(P[current] - P[path[path.size() - 2]]) : start_to_end;  // V_{pre,c}
+    const std::size_t n = candidates.size();
+    angle_to_goal.resize(n);
+    angle_to_previous.resize(n);
+    distance.resize(n);
+    curvature_badness.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto v = candidates[i];
+      const Eigen::Vector3d step = P[v] - P[current];  // V_{c,i}
+      angle_to_goal[i] = angle_between(step, start_to_end);
+      angle_to_previous[i] = angle_between(step, previous_direction);
+      distance[i] = (P[to] - P[v]).norm();
+      switch (options.marching_curvature_term) {
+        case MarchingCurvatureTerm::similar_to_current:
+          curvature_badness[i] = std::abs(mesh.mean_curvature[v] - mesh.mean_curvature[current]);
+          break;
+        case MarchingCurvatureTerm::similar_to_end:
+          curvature_badness[i] = std::abs(mesh.mean_curvature[v] - goal_curvature);
+          break;
+        case MarchingCurvatureTerm::high_magnitude: curvature_badness[i] = -std::abs(mesh.mean_curvature[v]); break;
+      }
+    }
+    rank_scores(angle_to_goal, f_o1);
+    rank_scores(angle_to_previous, f_o2);
+    rank_scores(distance, f_d);
+    rank_scores(curvature_badness, f_c);
+    std::size_t best = 0;
+    double best_score = -HUGE_VAL;
+    for (std::size_t i = 0; i < n; ++i) {
+      // Eq. (10): F = alpha f_O1 + beta f_O2 + gamma f_D + delta f_C
+      const double F = options.marching_alpha * f_o1[i] + options.marching_beta * f_o2[i] +
+                       options.marching_gamma * f_d[i] + options.marching_delta * f_c[i];
+      if (F > best_score) best_score = F, best = i;
+    }
+    const auto next = candidates[best];
+    seen.stamp[next] = seen.generation;
+    path.push_back(next);
+    // Passing the end: once within two edges of v_e, moving clearly away means it went by.
+    const double d = (P[to] - P[next]).norm();
+    if (closest < 2 * edge && d > closest + 2 * edge)
+      return fail("marching passed the end key without reaching it");
+    // Overshoot along V_{s,e}: the line is well beyond the end key's plane.
+    if ((P[next] - P[from]).dot(start_to_end) > start_to_end.squaredNorm() + 3 * edge * start_to_end.norm())
+      return fail("marching overshot the end key");
+    closest = std::min(closest, d);
+  }
+}
+
+std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
+                                                             bool feature_weighted, const InitialLineOptions& options,
+                                                             double feature_sign,
+                                                             const std::vector<std::uint32_t>* blocked) {
+  const auto& P = mesh.positions;
+  const double floor = feature_weighted ? std::clamp(options.feature_weight_floor, 1e-6, 1.0) : 1.0;
+  SearchScratch& s = scratch();
+  s.begin(mesh.n_vertices());
+  using Entry = std::pair<double, std::uint32_t>;  // (cost + heuristic, vertex)
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
+  // A*: the cheapest possible cost per unit length is `floor`, so floor * |x - goal| never
+  // overestimates and the search stays local to the two keys.
+  auto heuristic = [&](std::uint32_t v) { return floor * (P[to] - P[v]).norm(); };
+  s.cost[from] = 0;
+  s.parent[from] = from;
+  s.stamp[from] = s.generation;
+  open.emplace(heuristic(from), from);
+  while (!open.empty()) {
+    const auto [priority, v] = open.top();
+    open.pop();
+    if (s.closed(v)) continue;
+    s.closed_stamp[v] = s.generation;
+    if (v == to) break;
+    const double strength_v = feature_weighted ? feature_strength(mesh, v, feature_sign) : 0;
+    for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) {
+      const auto w = mesh.neighbors[k];
+      if (s.closed(w) || (w != to && is_blocked(blocked, w))) continue;
+      double weight = 1;
+      if (feature_weighted) {
+        const double strength = 0.5 * (strength_v + feature_strength(mesh, w, feature_sign));
+        weight = floor + (1 - floor) * (1 - strength);
+      }
+      const double cost = s.cost[v] + mesh.neighbor_edge_lengths[k] * weight;
+      if (!s.seen(w) || cost < s.cost[w]) {
+        s.stamp[w] = s.generation;
+        s.cost[w] = cost;
+        s.parent[w] = v;
+        open.emplace(cost + heuristic(w), w);
+      }
+    }
+  }
+  if (!s.closed(to)) return std::nullopt;
+  std::vector<std::uint32_t> path{to};
+  while (path.back() != from) path.push_back(s.parent[path.back()]);
+  std::reverse(path.begin(), path.end());
+  return path;
+}
+
+InitialLineResult find_initial_line(const PreparedMesh& mesh, const std::vector<std::uint32_t>& keys, bool closed,
+                                    const InitialLineOptions& options) {
+  if (keys.size() < 2) throw InvalidInputError("a feature line needs at least two keys");
+  if (closed && keys.size() < 2) throw InvalidInputError("a closed feature line needs at least two keys");
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    if (keys[i] >= mesh.n_vertices())
+      throw InvalidInputError("key " + std::to_string(i) + " is vertex " + std::to_string(keys[i]) +
+                              ", but the mesh has only " + std::to_string(mesh.n_vertices()) + " vertices");
+    if (mesh.component[keys[i]] < 0)
+      throw GeometryError("key " + std::to_string(i) + " (vertex " + std::to_string(keys[i]) + ") belongs to no triangle");
+    if (mesh.component[keys[i]] != mesh.component[keys[0]])
+      throw GeometryError("keys 0 and " + std::to_string(i) + " (vertices " + std::to_string(keys[0]) + " and " +
+                          std::to_string(keys[i]) + ") lie on different connected components of the mesh");
+  }
+  const std::size_t segments = closed ? keys.size() : keys.size() - 1;
+  for (std::size_t i = 0; i < segments; ++i)
+    if (keys[i] == keys[(i + 1) % keys.size()])
+      throw InvalidInputError("keys " + std::to_string(i) + " and " + std::to_string((i + 1) % keys.size()) +
+                              " are the same vertex " + std::to_string(keys[i]));
+
+  InitialLineResult result;
+  result.method = options.method;
+  const double sign = keys_feature_sign(mesh, keys, options);
+  std::vector<std::uint32_t> used;  // sorted: vertices already on the line (not to be crossed again)
+  auto mark_used = [&](const std::vector<std::uint32_t>& path) {
+    for (auto v : path) used.insert(std::lower_bound(used.begin(), used.end(), v), v);
+  };
+  // Later keys are blocked for earlier segments, so a segment does not run through a key it
+  // does not end at (the line would then visit that key twice).
+  std::vector<std::uint32_t> other_keys;
+
+  for (std::size_t seg = 0; seg < segments; ++seg) {
+    const auto a = keys[seg], b = keys[(seg + 1) % keys.size()];
+    std::vector<std::uint32_t> blocked = used;
+    for (auto k : keys)
+      if (k != a && k != b) blocked.insert(std::lower_bound(blocked.begin(), blocked.end(), k), k);
+    blocked.erase(std::unique(blocked.begin(), blocked.end()), blocked.end());
+    // The segment's own ends must stay reachable.
+    blocked.erase(std::remove_if(blocked.begin(), blocked.end(), [&](std::uint32_t v) { return v == a || v == b; }),
+                  blocked.end());
+
+    std::optional<std::vector<std::uint32_t>> path;
+    if (options.method == InitialMethod::marching) {
+      std::string why;
+      path = marching_search(mesh, a, b, options, &why, &blocked);
+      if (!path) {
+        if (!options.fallback)
+          throw GeometryError("marching search failed between keys " + std::to_string(seg) + " and " +
+                              std::to_string((seg + 1) % keys.size()) + ": " + why);
+        result.fallbacks.push_back({seg, InitialMethod::marching, InitialMethod::feature_path, why});
+      }
+    }
+    if (!path) {
+      const bool weighted = options.method != InitialMethod::geodesic;
+      path = shortest_edge_path(mesh, a, b, weighted, options, sign, &blocked);
+      if (!path) {
+        // The blocked vertices may wall the end off (e.g. a loop through a narrow part).
+        path = shortest_edge_path(mesh, a, b, weighted, options, sign, nullptr);
+        if (path)
+          result.warnings.push_back("segment " + std::to_string(seg) +
+                                    " had to cross the line's earlier segments to reach its end key");
+      }
+      if (!path) throw GeometryError("no edge path joins vertices " + std::to_string(a) + " and " + std::to_string(b));
+    }
+    if (seg == 0) {
+      result.key_indices.push_back(0);
+      result.vertices.push_back(a);
+    }
+    result.vertices.insert(result.vertices.end(), path->begin() + 1, path->end());
+    mark_used(*path);
+    if (!closed || seg + 1 < segments) result.key_indices.push_back(result.vertices.size() - 1);
+  }
+  if (closed) result.vertices.pop_back();  // the loop's last vertex is its first key again
+  result.length = path_length(mesh, result.vertices, closed);
+  return result;
+}
+
+}  // namespace featureline

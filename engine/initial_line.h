@@ -1,0 +1,101 @@
+// Stage 1: the initial feature line through the key vertices, along mesh edges.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/prepared_mesh.h"
+
+namespace featureline {
+
+enum class InitialMethod {
+  marching,      ///< the paper's marching feature search (Eqs. 9-10), made robust
+  feature_path,  ///< minimal path whose edge cost falls with |mean curvature|
+  geodesic,      ///< plain shortest edge path, the paper's baseline (Fig. 3b)
+};
+std::string to_string(InitialMethod method);
+std::optional<InitialMethod> parse_initial_method(const std::string& name);
+
+/// What f_C compares; the paper's text allows all three readings.
+enum class MarchingCurvatureTerm {
+  similar_to_current,  ///< literal: inverse proportion to |C_vi - C_vc| (wanders along iso-lines)
+  similar_to_end,      ///< "every vertex ... should have high-curvature similar to v_e": |C_vi - C_ve|
+  high_magnitude,      ///< "features are located in high-curvature regions": rank by |C_vi|
+};
+std::string to_string(MarchingCurvatureTerm term);
+std::optional<MarchingCurvatureTerm> parse_marching_curvature_term(const std::string& name);
+
+struct InitialLineOptions {
+  InitialMethod method = InitialMethod::feature_path;
+  /// Weights of Eq. (10), F = alpha f_O1 + beta f_O2 + gamma f_D + delta f_C; the paper uses 1,1,1,2.
+  double marching_alpha = 1, marching_beta = 1, marching_gamma = 1, marching_delta = 2;
+  MarchingCurvatureTerm marching_curvature_term = MarchingCurvatureTerm::similar_to_end;
+  /// When marching fails on a segment, use feature_path there and record it in `fallbacks`.
+  bool fallback = true;
+  /// feature_path edge weight = length * (floor + (1 - floor) * (1 - s)), where s in [0, 1] is the
+  /// edge's feature strength (mean |H| of its ends over the mesh's 90th percentile, clamped).
+  /// Smaller floor hugs features harder; 1 turns feature_path into geodesic.
+  double feature_weight_floor = 0.05;
+  /// Feature strength uses only curvature of the keys' sign (ridges or valleys) when the keys
+  /// agree in sign; |H| otherwise. Keeps a ridge path from jumping into a neighbouring valley.
+  bool sign_aware = true;
+};
+
+/// One fallback from marching to feature_path, as reported in `stats.fallbacks`.
+struct InitialLineFallback {
+  std::size_t segment = 0;  ///< index of the segment (from key `segment` to the next key)
+  InitialMethod from = InitialMethod::marching;
+  InitialMethod to = InitialMethod::feature_path;
+  std::string reason;
+};
+
+struct InitialLineResult {
+  InitialMethod method = InitialMethod::feature_path;
+  /// Vertex ids along the line. For closed lines the first key is not repeated at the end.
+  std::vector<std::uint32_t> vertices;
+  /// Index into `vertices` of each key, in key order.
+  std::vector<std::size_t> key_indices;
+  double length = 0;  ///< sum of edge lengths (closing edge included for closed lines)
+  std::vector<InitialLineFallback> fallbacks;
+  std::vector<std::string> warnings;
+};
+
+/// The initial line through `keys` (at least 2; a closed line joins the last key to the first).
+/// Consecutive segments avoid vertices already used, so a loop does not retrace itself.
+/// \throw InvalidInputError for ids out of range, fewer than two keys or repeated consecutive keys;
+///        GeometryError when keys lie on different components or on unreferenced vertices.
+InitialLineResult find_initial_line(const PreparedMesh& mesh, const std::vector<std::uint32_t>& keys, bool closed,
+                                    const InitialLineOptions& options = {});
+
+/// The marching feature search from `from` to `to` alone (no fallback). Returns the path
+/// (both ends included) or std::nullopt with `failure` set to the reason.
+std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
+                                                          const InitialLineOptions& options, std::string* failure = nullptr,
+                                                          const std::vector<std::uint32_t>* blocked = nullptr);
+
+/// Minimal edge path from `from` to `to` (A*). `feature_weighted` selects the feature_path cost,
+/// `blocked` (sorted ids) lists vertices to avoid in both searches, ends excepted.
+/// otherwise plain length. Vertices marked in `blocked` are avoided (ends excepted).
+std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
+                                                             bool feature_weighted, const InitialLineOptions& options,
+                                                             double feature_sign = 0,
+                                                             const std::vector<std::uint32_t>* blocked = nullptr);
+
+/// Feature strength in [0, 1] of vertex v: |H| (or the keys' signed H when `feature_sign` is
+/// +1 or -1) over the mesh's curvature scale, clamped.
+inline double feature_strength(const PreparedMesh& mesh, std::uint32_t v, double feature_sign) {
+  const double h = mesh.mean_curvature[v] / mesh.curvature_scale;
+  const double s = feature_sign == 0 ? (h < 0 ? -h : h) : feature_sign * h;
+  return s < 0 ? 0 : (s > 1 ? 1 : s);
+}
+
+/// +1 when every key sits on a ridge (H above 5% of the curvature scale), -1 when every key sits
+/// in a valley, 0 otherwise or when `options.sign_aware` is off.
+double keys_feature_sign(const PreparedMesh& mesh, const std::vector<std::uint32_t>& keys, const InitialLineOptions& options);
+
+/// Sum of Euclidean edge lengths along a vertex path.
+double path_length(const PreparedMesh& mesh, const std::vector<std::uint32_t>& path, bool closed = false);
+
+}  // namespace featureline

@@ -1,0 +1,68 @@
+// Reading triangle meshes from bytes or files into a raw, topology-free form.
+//
+// Every reader here is written for untrusted input: counts in headers are checked
+// against the byte size before anything is reserved, indices are range-checked,
+// non-finite coordinates are rejected, and nothing outside the given bytes is ever
+// opened (OBJ `mtllib`, glTF buffer URIs). Problems the reader can repair are
+// reported in `RawMesh::warnings`, never silently.
+//
+// Ids: for OBJ, OFF and PLY, vertex i and face j are the file's own i-th vertex
+// record and j-th face (after fan triangulation of polygons, in file order). STL,
+// glTF/GLB and Draco carry no shared vertex ids, so their vertices are welded by
+// exact position (first occurrence order).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace featureline {
+
+enum class MeshFormat { obj, off, ply, stl, gltf, glb, drc };
+
+/// "obj", "off", ... (lower case, as used in `?format=` and file extensions).
+std::string to_string(MeshFormat format);
+/// Parses "obj", "OFF", "glb", ... ; std::nullopt for anything else.
+std::optional<MeshFormat> parse_mesh_format(std::string_view name);
+/// Format from a file name's extension; std::nullopt when unknown.
+std::optional<MeshFormat> mesh_format_from_path(std::string_view path);
+/// Format from the first bytes (magic numbers, keywords); std::nullopt when unsure.
+std::optional<MeshFormat> sniff_mesh_format(std::string_view bytes);
+
+struct ReadMeshOptions {
+  /// Refuse meshes with more vertex records than this (LimitExceededError).
+  std::size_t max_vertices = 20'000'000;
+  /// Refuse meshes with more triangles (after triangulation) than this (LimitExceededError).
+  std::size_t max_triangles = 40'000'000;
+  /// Refuse files larger than this when reading from a path (LimitExceededError).
+  std::size_t max_file_bytes = std::size_t(2) << 30;
+};
+
+/// A triangle soup with ids as described above; no topology yet (see prepare_mesh).
+struct RawMesh {
+  MeshFormat format = MeshFormat::obj;
+  std::vector<std::array<double, 3>> positions;
+  /// Vertex indices into `positions`, every index < positions.size(); may still
+  /// contain degenerate (repeated index) or duplicate triangles: prepare_mesh reports them.
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  /// Number of polygons in the file before fan triangulation (== triangles.size() for triangle files).
+  std::size_t source_faces = 0;
+  /// True when vertices were merged by exact position (STL, glTF, Draco).
+  bool welded = false;
+  /// Repairs and oddities, one human-readable sentence each.
+  std::vector<std::string> warnings;
+};
+
+/// Reads a mesh of the given format from memory.
+/// \throw UnsupportedFormatError, MeshFormatError, LimitExceededError
+RawMesh read_mesh(std::string_view bytes, MeshFormat format, const ReadMeshOptions& options = {});
+
+/// Reads a mesh from a file; the format comes from the extension, else from sniffing.
+/// \throw as read_mesh, and MeshFormatError when the file cannot be opened.
+RawMesh read_mesh_file(const std::string& path, const ReadMeshOptions& options = {});
+
+}  // namespace featureline

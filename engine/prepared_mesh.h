@@ -1,0 +1,91 @@
+// The prepared mesh: loaded once, validated, with adjacency, normals and curvature
+// precomputed. Immutable after prepare_mesh returns, so the server shares one
+// instance between threads without copying or locking.
+#pragma once
+
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/mesh_io.h"
+
+namespace featureline {
+
+/// The one mesh type of the project: OpenMesh triangle mesh with double precision.
+using TriMesh = OpenMesh::TriMesh_ArrayKernelT<OpenMesh::DefaultTraitsDouble>;
+
+struct PrepareOptions {
+  /// Laplacian smoothing passes applied to the mean curvature field (0 = raw cotangent values).
+  /// Each pass replaces H_i by (H_i + mean of its neighbours) / 2; helps on noisy scans.
+  int curvature_smoothing_passes = 0;
+};
+
+/// Counts and measures of a prepared mesh, as `featureline info` and the server report them.
+struct MeshStatistics {
+  std::size_t vertices = 0;               ///< vertices of the prepared mesh (file vertices + duplicates)
+  std::size_t faces = 0;                  ///< triangles of the prepared mesh
+  std::size_t file_vertices = 0;          ///< vertex records in the input
+  std::size_t file_faces = 0;             ///< polygons in the input (before triangulation)
+  std::size_t components = 0;             ///< edge-connected components that have faces
+  std::size_t boundary_loops = 0;         ///< cycles of boundary edges
+  std::size_t boundary_edges = 0;         ///< edges with one face
+  std::size_t non_manifold_edges = 0;     ///< input edges shared by more than two triangles
+  std::size_t non_manifold_vertices = 0;  ///< input vertices whose triangles form more than one fan
+  std::size_t unreferenced_vertices = 0;  ///< vertices used by no triangle
+  std::size_t dropped_faces = 0;          ///< degenerate triangles (a repeated vertex index) not added
+  std::size_t duplicated_vertices = 0;    ///< vertex copies added so non-manifold triangles fit
+  double mean_edge_length = 0;
+  std::array<double, 3> bbox_min{0, 0, 0};
+  std::array<double, 3> bbox_max{0, 0, 0};
+  double curvature_min = 0, curvature_max = 0;
+  /// |H| percentiles 50, 90, 99 (the 90th is the scale the engine normalises by).
+  double abs_curvature_p50 = 0, abs_curvature_p90 = 0, abs_curvature_p99 = 0;
+};
+
+struct PreparedMesh {
+  TriMesh mesh;  ///< vertex i is input vertex i; duplicates made for non-manifold faces follow
+  /// Input triangle index of each mesh face (faces keep input order; only dropped ones are missing).
+  std::vector<std::uint32_t> source_triangle;
+  /// Corner vertex ids of each face in the input's corner order (barycentric coordinates in
+  /// results refer to this order).
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::vector<Eigen::Vector3d> positions;       ///< copy of the points for cache-friendly access
+  std::vector<Eigen::Vector3d> vertex_normals;  ///< angle-weighted, unit length (zero when isolated)
+  /// Signed mean curvature H per vertex (cotangent formula, mixed Voronoi areas; Meyer et al. 2003,
+  /// the discrete mean curvature the paper cites). Positive on convex ridges with outward normals;
+  /// 1/r on a sphere of radius r. Boundary vertices take the mean of their interior neighbours.
+  std::vector<double> mean_curvature;
+  /// Vertex adjacency in compressed rows: neighbours of v are
+  /// neighbors[neighbor_offsets[v] .. neighbor_offsets[v+1]).
+  std::vector<std::uint32_t> neighbor_offsets;
+  std::vector<std::uint32_t> neighbors;
+  std::vector<double> neighbor_edge_lengths;  ///< parallel to `neighbors`
+  std::vector<std::int32_t> component;        ///< component id per vertex, -1 for unreferenced vertices
+  /// Reference curvature magnitude: the 90th percentile of |H| (never zero). Engine stages
+  /// measure curvature in units of this, so options do not depend on the mesh's scale.
+  double curvature_scale = 1;
+  MeshStatistics statistics;
+  std::vector<std::string> warnings;
+  double prepare_ms = 0;
+
+  std::size_t n_vertices() const { return positions.size(); }
+  /// Bytes this object holds (measured from container capacities), for cache budgets.
+  std::size_t memory_bytes() const;
+};
+
+/// Builds the prepared mesh from a raw triangle soup.
+/// \throw GeometryError when no usable triangle remains.
+std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options = {});
+
+/// The signed mean curvature of every vertex (exposed for tests and tools).
+std::vector<double> compute_mean_curvature(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& normals);
+
+/// Angle-weighted unit vertex normals.
+std::vector<Eigen::Vector3d> compute_vertex_normals(const TriMesh& mesh);
+
+}  // namespace featureline

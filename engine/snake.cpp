@@ -1,0 +1,317 @@
+#include "engine/snake.h"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cmath>
+
+#include "engine/errors.h"
+
+namespace featureline {
+namespace {
+
+double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// Barycentric coordinates of q in the plane triangle (a, b, c).
+Eigen::Vector3d barycentric_of(const Eigen::Vector2d& q, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                               const Eigen::Vector2d& c) {
+  const double area = cross2(b - a, c - a);
+  if (area == 0) return {1, 0, 0};
+  const double l1 = cross2(c - b, q - b) / area;
+  const double l2 = cross2(a - c, q - c) / area;
+  return {l1, l2, 1 - l1 - l2};
+}
+
+Eigen::Vector2d closest_on_segment(const Eigen::Vector2d& q, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((q - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return a + t * ab;
+}
+
+// Walks from `start` towards `target`; returns false when the walk does not settle (folded
+// layouts can cycle), in which case `out` is left untouched.
+bool walk(const FeatureStrip& strip, const FlatStrip& flat, std::uint32_t start, const Eigen::Vector2d& target,
+          StripPoint& out) {
+  std::uint32_t t = start;
+  const std::size_t guard = 4 * strip.triangles.size() + 16;
+  for (std::size_t step = 0; step < guard; ++step) {
+    const auto& tri = strip.triangles[t];
+    const Eigen::Vector2d& a = flat.uv[tri[0]];
+    const Eigen::Vector2d& b = flat.uv[tri[1]];
+    const Eigen::Vector2d& c = flat.uv[tri[2]];
+    const Eigen::Vector3d lambda = barycentric_of(target, a, b, c);
+    int worst = 0;
+    for (int k = 1; k < 3; ++k)
+      if (lambda[k] < lambda[worst]) worst = k;
+    if (lambda[worst] >= -1e-12) {
+      out.triangle = t;
+      out.barycentric = lambda.cwiseMax(0.0) / lambda.cwiseMax(0.0).sum();
+      out.uv = target;
+      return true;
+    }
+    const std::int32_t next = strip.triangle_neighbors[t][worst];
+    if (next >= 0 && flat.triangle_valid[std::size_t(next)]) {
+      t = std::uint32_t(next);
+      continue;
+    }
+    // The strip's border (or a fold) is in the way: stop on the nearest point of this triangle.
+    Eigen::Vector2d best = closest_on_segment(target, a, b);
+    for (const auto& candidate : {closest_on_segment(target, b, c), closest_on_segment(target, c, a)})
+      if ((candidate - target).squaredNorm() < (best - target).squaredNorm()) best = candidate;
+    const Eigen::Vector3d clamped = barycentric_of(best, a, b, c).cwiseMax(0.0);
+    out.triangle = t;
+    out.barycentric = clamped / clamped.sum();
+    out.uv = out.barycentric[0] * a + out.barycentric[1] * b + out.barycentric[2] * c;
+    return true;
+  }
+  return false;
+}
+
+// (I + tau A) restricted to the interior points, A = alpha D1^T D1 + beta D2^T D2 built from the
+// energy sum alpha |v_{i+1} - v_i|^2 + beta |v_{i-1} - 2 v_i + v_{i+1}|^2 (Eqs. 5, 6, 12). Building A
+// from the energy gives the right rows next to the pinned ends: a truncated fourth difference
+// there would act as if v_{-1} = 0 and pull the line towards the origin.
+Eigen::SparseMatrix<double> stiffness(std::size_t n, double alpha, double beta) {
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(n * 9);
+  for (std::size_t i = 0; i + 1 < n; ++i) {  // first differences
+    const std::size_t j = i + 1;
+    triplets.emplace_back(i, i, alpha);
+    triplets.emplace_back(j, j, alpha);
+    triplets.emplace_back(i, j, -alpha);
+    triplets.emplace_back(j, i, -alpha);
+  }
+  for (std::size_t i = 0; i + 2 < n; ++i) {  // second differences (1, -2, 1) at i, i+1, i+2
+    const double w[3] = {1, -2, 1};
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) triplets.emplace_back(i + r, i + c, beta * w[r] * w[c]);
+  }
+  Eigen::SparseMatrix<double> A{Eigen::Index(n), Eigen::Index(n)};
+  A.setFromTriplets(triplets.begin(), triplets.end());
+  return A;
+}
+
+}  // namespace
+
+std::string to_string(SnakeForce force) { return force == SnakeForce::paper ? "paper" : "smooth"; }
+
+std::optional<SnakeForce> parse_snake_force(const std::string& name) {
+  if (name == "paper") return SnakeForce::paper;
+  if (name == "smooth") return SnakeForce::smooth;
+  return std::nullopt;
+}
+
+StripPoint locate_by_walking(const FeatureStrip& strip, const FlatStrip& flat, std::uint32_t start,
+                             const Eigen::Vector2d& target) {
+  StripPoint point;
+  point.triangle = start;
+  const auto& tri = strip.triangles[start];
+  point.uv = (flat.uv[tri[0]] + flat.uv[tri[1]] + flat.uv[tri[2]]) / 3.0;
+  point.barycentric = Eigen::Vector3d::Constant(1.0 / 3.0);
+  walk(strip, flat, start, target, point);
+  return point;
+}
+
+SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip, const FlatStrip& flat,
+                              const SnakeOptions& o) {
+  if (!(o.alpha >= 0) || !(o.beta >= 0) || !(o.tau > 0) || !(o.kappa >= 0) || !(o.exponent > 0) || !(o.spacing > 0.01) ||
+      o.max_iterations < 0 || o.resample_every < 1 || !(o.max_step > 0) || !(o.curvature_cap > 0))
+    throw InvalidInputError("snake options out of range (alpha, beta, kappa >= 0; tau, exponent, max_step > 0; spacing > 0.01)");
+  SnakeResult result;
+  const double unit = strip.mean_edge_length;  // distances below are in strip edge lengths
+  const std::size_t nv = strip.vertices.size();
+  const std::size_t nt = strip.triangles.size();
+
+  // Potential |C|^p per strip vertex (Eq. 13 with the exponent of Eq. 15).
+  std::vector<double> potential(nv, 0.0);
+  for (std::size_t v = 0; v < nv; ++v) {
+    const double h = pm.mean_curvature[strip.vertices[v]] / pm.curvature_scale;
+    double s = o.feature_sign == 0 ? std::abs(h) : std::max(0.0, o.feature_sign * h);
+    s = std::min(s, o.curvature_cap);
+    potential[v] = std::pow(s, o.exponent);
+  }
+  // Gradient of the barycentric interpolant, constant per triangle (scaled coordinates).
+  std::vector<Eigen::Vector2d> triangle_gradient(nt, Eigen::Vector2d::Zero());
+  std::vector<double> triangle_area(nt, 0.0);
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (!flat.triangle_valid[t]) continue;
+    const auto& tri = strip.triangles[t];
+    const Eigen::Vector2d p[3] = {flat.uv[tri[0]] / unit, flat.uv[tri[1]] / unit, flat.uv[tri[2]] / unit};
+    const double twice_area = cross2(p[1] - p[0], p[2] - p[0]);
+    Eigen::Vector2d g = Eigen::Vector2d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector2d e = p[(k + 2) % 3] - p[(k + 1) % 3];  // edge opposite corner k
+      g += potential[tri[k]] * Eigen::Vector2d(-e.y(), e.x()) / twice_area;
+    }
+    triangle_gradient[t] = g;
+    triangle_area[t] = 0.5 * twice_area;
+  }
+  std::vector<Eigen::Vector2d> vertex_gradient;
+  if (o.force == SnakeForce::smooth) {
+    vertex_gradient.assign(nv, Eigen::Vector2d::Zero());
+    std::vector<double> weight(nv, 0.0);
+    for (std::size_t t = 0; t < nt; ++t) {
+      if (!flat.triangle_valid[t]) continue;
+      for (auto v : strip.triangles[t]) {
+        vertex_gradient[v] += triangle_area[t] * triangle_gradient[t];
+        weight[v] += triangle_area[t];
+      }
+    }
+    for (std::size_t v = 0; v < nv; ++v)
+      if (weight[v] > 0) vertex_gradient[v] /= weight[v];
+  }
+  auto force_at = [&](const StripPoint& p) -> Eigen::Vector2d {
+    if (o.force == SnakeForce::paper) return triangle_gradient[p.triangle];
+    const auto& tri = strip.triangles[p.triangle];
+    return p.barycentric[0] * vertex_gradient[tri[0]] + p.barycentric[1] * vertex_gradient[tri[1]] +
+           p.barycentric[2] * vertex_gradient[tri[2]];
+  };
+
+  // A valid triangle at each line vertex, to start walks from.
+  std::vector<std::int64_t> triangle_at(nv, -1);
+  std::vector<int> corner_at(nv, 0);
+  for (std::size_t t = 0; t < nt; ++t)
+    if (flat.triangle_valid[t])
+      for (int k = 0; k < 3; ++k)
+        if (triangle_at[strip.triangles[t][k]] < 0) triangle_at[strip.triangles[t][k]] = std::int64_t(t), corner_at[strip.triangles[t][k]] = k;
+  auto point_at_vertex = [&](std::uint32_t v) {
+    if (triangle_at[v] < 0) throw GeometryError("the feature strip could not be flattened around a line vertex");
+    StripPoint p;
+    p.triangle = std::uint32_t(triangle_at[v]);
+    p.barycentric = Eigen::Vector3d::Zero();
+    p.barycentric[corner_at[v]] = 1;
+    p.uv = flat.uv[v];
+    return p;
+  };
+
+  // Initial snake: the flattened line resampled at the target spacing.
+  const double h = o.spacing * unit;
+  std::vector<StripPoint>& points = result.points;
+  points.push_back(point_at_vertex(strip.line.front()));
+  for (std::size_t i = 0; i + 1 < strip.line.size(); ++i) {
+    const Eigen::Vector2d a = flat.uv[strip.line[i]], b = flat.uv[strip.line[i + 1]];
+    const int pieces = std::max(1, int(std::lround((b - a).norm() / h)));
+    StripPoint last = i == 0 ? points.back() : point_at_vertex(strip.line[i]);
+    for (int k = 1; k < pieces; ++k) {
+      StripPoint p = last;
+      walk(strip, flat, last.triangle, a + (b - a) * (double(k) / pieces), p);
+      points.push_back(p);
+      last = p;
+    }
+    if (i + 2 < strip.line.size()) {
+      // interior line vertices are ordinary, free snake points
+      StripPoint p = last;
+      walk(strip, flat, last.triangle, b, p);
+      points.push_back(p);
+    }
+  }
+  points.push_back(point_at_vertex(strip.line.back()));
+
+  auto resample = [&]() {
+    std::vector<StripPoint> next;
+    next.reserve(points.size() + 8);
+    next.push_back(points.front());
+    for (std::size_t i = 1; i < points.size(); ++i) {
+      const bool last = i + 1 == points.size();
+      const double gap = (points[i].uv - next.back().uv).norm();
+      if (!last && gap < 0.5 * h) continue;  // too close: delete
+      if (gap > 1.5 * h) {                     // too far: insert evenly
+        const int pieces = int(std::ceil(gap / h));
+        const StripPoint from = next.back();
+        for (int k = 1; k < pieces; ++k) {
+          StripPoint p = from;
+          walk(strip, flat, from.triangle, from.uv + (points[i].uv - from.uv) * (double(k) / pieces), p);
+          next.push_back(p);
+        }
+      }
+      next.push_back(points[i]);
+    }
+    // the last kept interior point may now sit too close to the pinned end
+    if (next.size() > 2 && (next.back().uv - next[next.size() - 2].uv).norm() < 0.5 * h) next.erase(next.end() - 2);
+    points.swap(next);
+  };
+
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> solver;
+  Eigen::SparseMatrix<double> A;
+  std::size_t factored_size = 0;
+  Eigen::VectorXd x, y, rhs_x, rhs_y;
+  for (int iteration = 0; iteration < o.max_iterations; ++iteration) {
+    if (iteration % o.resample_every == 0) resample();
+    const std::size_t n = points.size();
+    if (n <= 2) {
+      result.converged = true;
+      break;
+    }
+    const std::size_t m = n - 2;  // interior unknowns
+    if (n != factored_size) {
+      A = stiffness(n, o.alpha, o.beta);
+      Eigen::SparseMatrix<double> M = A.block(1, 1, Eigen::Index(m), Eigen::Index(m)) * o.tau;
+      for (Eigen::Index i = 0; i < Eigen::Index(m); ++i) M.coeffRef(i, i) += 1.0;
+      solver.compute(M);
+      if (solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
+      factored_size = n;
+    }
+    x.resize(Eigen::Index(n));
+    y.resize(Eigen::Index(n));
+    for (std::size_t i = 0; i < n; ++i) x[Eigen::Index(i)] = points[i].uv.x() / unit, y[Eigen::Index(i)] = points[i].uv.y() / unit;
+    // Pinned ends enter the right-hand side through A's coupling columns.
+    Eigen::VectorXd ends_x = Eigen::VectorXd::Zero(Eigen::Index(n)), ends_y = Eigen::VectorXd::Zero(Eigen::Index(n));
+    ends_x[0] = x[0], ends_x[Eigen::Index(n - 1)] = x[Eigen::Index(n - 1)];
+    ends_y[0] = y[0], ends_y[Eigen::Index(n - 1)] = y[Eigen::Index(n - 1)];
+    const Eigen::VectorXd coupling_x = A * ends_x, coupling_y = A * ends_y;
+    rhs_x.resize(Eigen::Index(m));
+    rhs_y.resize(Eigen::Index(m));
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+      // Eq. (15): (I + tau A) v_{k+1} = v_k + tau kappa grad |C|^p, the force step capped so a
+      // point never jumps across a crest in one iteration.
+      Eigen::Vector2d step = o.tau * o.kappa * force_at(points[i]);
+      if (o.normal_force_only) {
+        const Eigen::Vector2d chord = points[i + 1].uv - points[i - 1].uv;
+        const double chord_len = chord.norm();
+        if (chord_len > 0) step -= step.dot(chord / chord_len) * (chord / chord_len);
+      }
+      const double len = step.norm();
+      if (len > o.max_step) step *= o.max_step / len;
+      const auto r = Eigen::Index(i - 1);
+      rhs_x[r] = x[Eigen::Index(i)] + step.x() - o.tau * coupling_x[Eigen::Index(i)];
+      rhs_y[r] = y[Eigen::Index(i)] + step.y() - o.tau * coupling_y[Eigen::Index(i)];
+    }
+    const Eigen::VectorXd new_x = solver.solve(rhs_x), new_y = solver.solve(rhs_y);
+    double moved = 0;
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+      const Eigen::Vector2d target(new_x[Eigen::Index(i - 1)] * unit, new_y[Eigen::Index(i - 1)] * unit);
+      if (!target.allFinite()) continue;
+      const Eigen::Vector2d before = points[i].uv;
+      walk(strip, flat, points[i].triangle, target, points[i]);
+      moved += (points[i].uv - before).norm() / unit;
+    }
+    result.iterations = iteration + 1;
+    result.last_displacement = moved / double(m);
+    if (iteration >= o.resample_every && result.last_displacement < o.tolerance) {
+      result.converged = true;
+      break;
+    }
+  }
+  return result;
+}
+
+std::vector<SurfacePoint> map_to_surface(const PreparedMesh& pm, const FeatureStrip& strip,
+                                         const std::vector<StripPoint>& points) {
+  std::vector<SurfacePoint> out;
+  out.reserve(points.size());
+  for (const auto& p : points) {
+    SurfacePoint s;
+    s.face = strip.faces[p.triangle];
+    const auto& tri = strip.triangles[p.triangle];
+    s.position = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      s.barycentric[k] = p.barycentric[k];
+      s.position += p.barycentric[k] * pm.positions[strip.vertices[tri[k]]];
+    }
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace featureline

@@ -1,0 +1,89 @@
+// Stage 3: snake (active contour) refinement of the line on the flattened strip, and
+// stage 4: mapping every refined point back to the surface (paper Eqs. 12-15).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "engine/feature_strip.h"
+#include "engine/prepared_mesh.h"
+
+namespace featureline {
+
+/// How the image force of Eq. (15) is evaluated inside a flattened triangle.
+enum class SnakeForce {
+  /// The paper: |C|^p interpolated barycentrically, so its gradient is constant per triangle.
+  /// Maxima of a linear interpolant sit on vertices, so the line is drawn towards vertices.
+  paper,
+  /// Per-vertex gradients (area-weighted means of the adjacent triangles' gradients), then
+  /// interpolated barycentrically: a continuous force whose zero lies between vertices, where
+  /// the crest is.
+  smooth,
+};
+std::string to_string(SnakeForce force);
+std::optional<SnakeForce> parse_snake_force(const std::string& name);
+
+/// Distances are in units of the strip's mean edge length, curvature in units of the mesh's
+/// curvature scale, so the defaults work at any mesh size and resolution.
+struct SnakeOptions {
+  double alpha = 0.02;       ///< elasticity weight of Eq. (12) (first differences)
+  double beta = 8.0;         ///< rigidity weight of Eq. (12) (second differences)
+  double tau = 1.0;          ///< time step of the semi-implicit Euler step (I + tau A) v' = v + tau kappa F
+  double kappa = 0.1;        ///< weight of the feature force, F = grad |C|^p
+  double exponent = 2.0;     ///< p: the paper's Eq. (15) uses |C|^2
+  double curvature_cap = 4;  ///< |C| is clamped at this (in curvature-scale units) so spikes do not dominate
+  double max_step = 0.25;    ///< largest move of a point by the force in one iteration
+  int max_iterations = 300;  ///< iteration cap
+  double tolerance = 2e-4;   ///< stop when the mean point displacement of an iteration falls below this
+  double spacing = 0.5;      ///< target distance between snake points
+  int resample_every = 5;    ///< iterations between insert/delete passes
+  SnakeForce force = SnakeForce::smooth;
+  /// Keep only the force's component normal to the line. The tangential part only slides
+  /// points along the line, bunching them at curvature maxima (vertices) and making the
+  /// discrete line jagged; the paper applies the whole gradient (false).
+  bool normal_force_only = true;
+  /// +1: attract to ridges (H > 0) only, -1: valleys only, 0: |H| as in the paper.
+  double feature_sign = 0;
+};
+
+/// A point on the strip, hence on the surface.
+struct StripPoint {
+  std::uint32_t triangle = 0;  ///< local strip triangle
+  Eigen::Vector3d barycentric{1, 0, 0};  ///< w.r.t. the triangle's corners in strip (= mesh face) order
+  Eigen::Vector2d uv{0, 0};              ///< plane position (strip units, not scaled)
+};
+
+struct SnakeResult {
+  std::vector<StripPoint> points;  ///< first and last are the pinned ends
+  int iterations = 0;
+  double last_displacement = 0;  ///< mean point displacement of the last iteration (edge lengths)
+  bool converged = false;
+};
+
+/// Refines the strip's line; both ends of the line stay pinned. The line's points never
+/// leave the strip: a point pushed past the strip's border stops on it.
+SnakeResult refine_with_snake(const PreparedMesh& mesh, const FeatureStrip& strip, const FlatStrip& flat,
+                              const SnakeOptions& options = {});
+
+/// A point of the refined line on the original surface.
+struct SurfacePoint {
+  Eigen::Vector3d position;
+  std::uint32_t face = 0;             ///< mesh face id
+  std::array<double, 3> barycentric;  ///< w.r.t. PreparedMesh::triangles[face], sums to 1
+};
+
+/// Stage 4: maps strip points to faces, barycentric coordinates and 3D points.
+std::vector<SurfacePoint> map_to_surface(const PreparedMesh& mesh, const FeatureStrip& strip,
+                                         const std::vector<StripPoint>& points);
+
+/// Locates `target` by walking across strip triangles from `start`. Returns the point found;
+/// when the walk meets the strip's border the point is clamped onto it.
+StripPoint locate_by_walking(const FeatureStrip& strip, const FlatStrip& flat, std::uint32_t start,
+                             const Eigen::Vector2d& target);
+
+}  // namespace featureline

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs the Debian packages Featureline needs, only those missing (idempotent), then
+# configures and builds into build/ (or $BUILD_DIR) with the given extra CMake arguments.
+#   scripts/setup.sh [cmake args...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(g++ cmake ninja-build pkg-config git ca-certificates
+  libopenmesh-dev libeigen3-dev libcpp-httplib-dev nlohmann-json3-dev libtinygltf-dev libdraco-dev
+  libgtest-dev jq curl)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  if [ "$(id -u)" != 0 ]; then sudo=sudo; else sudo=; fi
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+build=${BUILD_DIR:-build}
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
+cmake --build "$build" -j "$(nproc)"

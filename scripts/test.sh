@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Every test: a Release build with warnings, then the same tests under AddressSanitizer and
+# UndefinedBehaviorSanitizer. Prints ctest's summary line for each.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup.sh
+status=0
+echo "== ctest (Release)"
+ctest --test-dir "${BUILD_DIR:-build}" --output-on-failure -j "$(nproc)" || status=1
+echo "== ctest (ASan + UBSan)"
+BUILD_DIR=build-sanitize scripts/setup.sh -DFEATURELINE_SANITIZE=ON -DFEATURELINE_BUILD_BENCH=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo
+ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+  ctest --test-dir build-sanitize --output-on-failure -j "$(nproc)" || status=1
+exit $status

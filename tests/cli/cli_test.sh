@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# The featureline CLI as a user sees it: JSON on stdout, exit codes, one-line errors.
+set -u
+fail=0
+check() {  # check NAME CONDITION...
+  local name=$1; shift
+  if "$@"; then echo "ok   $name"; else echo "FAIL $name"; fail=1; fi
+}
+mesh="$SHARED/data/meshes/fandisk.off"
+[ -f "$mesh" ] || { echo "FAIL missing test mesh $mesh (expected in ../shared/data/meshes)"; exit 1; }
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+
+"$FEATURELINE" info "$mesh" >"$tmp/info.json" 2>"$tmp/err"; rc=$?
+check "info exits 0" [ $rc = 0 ]
+check "info counts fandisk's vertices" [ "$(jq .vertices "$tmp/info.json")" = 6475 ]
+check "info counts fandisk's faces" [ "$(jq .faces "$tmp/info.json")" = 12946 ]
+check "info reports one component" [ "$(jq .components "$tmp/info.json")" = 1 ]
+
+"$FEATURELINE" detect "$mesh" --keys 10,200,400 >"$tmp/line.json" 2>"$tmp/err"; rc=$?
+check "detect exits 0" [ $rc = 0 ]
+check "detect echoes the keys" [ "$(jq -c .keys "$tmp/line.json")" = "[10,200,400]" ]
+check "initial line starts at the first key" [ "$(jq '.initial.vertices[0]' "$tmp/line.json")" = 10 ]
+check "initial line ends at the last key" [ "$(jq '.initial.vertices[-1]' "$tmp/line.json")" = 400 ]
+check "refined line has points, faces, barycentric in step" \
+  [ "$(jq '(.refined.points|length) == (.refined.faces|length) and (.refined.faces|length) == (.refined.barycentric|length) and (.refined.points|length) > 2' "$tmp/line.json")" = true ]
+check "timings are reported" [ "$(jq '.stats.timings_ms.total > 0' "$tmp/line.json")" = true ]
+
+"$FEATURELINE" detect "$mesh" --keys 10,200 --initial geodesic --no-refine >"$tmp/geo.json"; rc=$?
+check "--initial geodesic is honoured" [ "$(jq -r .initial.method "$tmp/geo.json")" = geodesic ]
+
+"$FEATURELINE" detect "$mesh" --keys 10,200,400 --out "$tmp/line.glb"; rc=$?
+check "--out .glb writes a GLB" [ $rc = 0 ] && check "GLB magic" [ "$(head -c 4 "$tmp/line.glb")" = glTF ]
+
+"$FEATURELINE" detect "$mesh" --keys 10,99999999 >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "out-of-range key exits 1" [ $rc = 1 ]
+check "out-of-range key: one clear line" [ "$(cat "$tmp/err")" = "featureline: key 1 is vertex 99999999, but the mesh has only 6475 vertices" ]
+check "nothing on stdout on error" [ ! -s "$tmp/out" ]
+
+"$FEATURELINE" detect "$tmp/missing.obj" --keys 1,2 >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "missing file exits 1" [ $rc = 1 ]
+check "missing file: one line" [ "$(wc -l <"$tmp/err")" = 1 ]
+
+"$FEATURELINE" detect "$mesh" --keys 1,2 --bogus >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "unknown flag exits 2" [ $rc = 2 ]
+check "unknown flag named" grep -q 'unknown option "--bogus"' "$tmp/err"
+
+"$FEATURELINE" detect "$mesh" --keys 1,2 --options '{"snake": {"alpah": 1}}' >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "misspelt JSON option exits 1" [ $rc = 1 ]
+check "misspelt JSON option named" [ "$(cat "$tmp/err")" = 'featureline: unknown option "options.snake.alpah"' ]
+
+"$FEATURELINE" detect "$mesh" --keys 1,x >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "malformed keys exit 1" [ $rc = 1 ]
+exit $fail

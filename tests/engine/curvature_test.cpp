@@ -1,0 +1,146 @@
+// Mean curvature (cotangent formula, mixed Voronoi areas) against known answers, and the
+// prepared mesh's statistics.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/errors.h"
+#include "engine/prepared_mesh.h"
+#include "tests/support/synthetic_meshes.h"
+
+namespace featureline {
+namespace {
+
+using testing::make_cylinder;
+using testing::make_icosphere;
+using testing::make_plane_grid;
+using testing::make_uv_sphere;
+using testing::scaled;
+using testing::translated;
+
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+TEST(Curvature, IcosphereIsOneOverRadius) {
+  for (double r : {0.5, 1.0, 7.0}) {
+    const auto mesh = prepare_mesh(make_icosphere(r, 4));
+    for (double h : mesh->mean_curvature) EXPECT_NEAR(h * r, 1.0, 0.01) << "radius " << r;
+  }
+}
+
+TEST(Curvature, StableUnderScalingByMillion) {
+  const auto unit = prepare_mesh(make_icosphere(1.0, 3));
+  for (double s : {1e-6, 1e6}) {
+    const auto mesh = prepare_mesh(scaled(make_icosphere(1.0, 3), s));
+    for (std::size_t v = 0; v < unit->n_vertices(); ++v)
+      EXPECT_NEAR(mesh->mean_curvature[v] * s, unit->mean_curvature[v], 1e-9) << "scale " << s;
+    EXPECT_NEAR(mesh->curvature_scale * s, unit->curvature_scale, 1e-9);
+  }
+}
+
+TEST(Curvature, IrregularUvSphereMedianIsOneOverRadius) {
+  const auto mesh = prepare_mesh(make_uv_sphere(2.0, 40, 64));
+  EXPECT_NEAR(median(mesh->mean_curvature), 0.5, 0.01);
+}
+
+TEST(Curvature, SignFollowsOutwardNormals) {
+  // Reversing every triangle turns the normals inward and flips the sign of H.
+  auto raw = make_icosphere(1.0, 2);
+  for (auto& t : raw.triangles) std::swap(t[1], t[2]);
+  const auto mesh = prepare_mesh(raw);
+  for (double h : mesh->mean_curvature) EXPECT_NEAR(h, -1.0, 0.02);
+}
+
+TEST(Curvature, CylinderSideIsOneOverTwoRadius) {
+  const double r = 0.5;
+  const auto mesh = prepare_mesh(make_cylinder(r, 4.0, 40, 48, false));
+  // Rings away from the open ends (boundary vertices borrow from their neighbours).
+  for (std::uint32_t v = 48 * 5; v < 48 * 36; ++v) EXPECT_NEAR(mesh->mean_curvature[v], 1.0 / (2 * r), 0.02);
+}
+
+TEST(Curvature, PlaneIsZero) {
+  const auto mesh = prepare_mesh(make_plane_grid(20, 0.2, 3));
+  for (double h : mesh->mean_curvature) EXPECT_NEAR(h, 0.0, 1e-9);
+}
+
+TEST(Curvature, SmoothingPassesReduceNoise) {
+  auto raw = make_icosphere(1.0, 3);
+  // Radial noise makes the curvature field rough; smoothing must make it less rough.
+  for (std::size_t i = 0; i < raw.positions.size(); ++i) {
+    const double f = 1.0 + 0.01 * std::sin(double(i) * 12.9898);
+    for (auto& c : raw.positions[i]) c *= f;
+  }
+  auto spread = [](const PreparedMesh& m) {
+    double sum = 0;
+    for (double h : m.mean_curvature) sum += (h - 1) * (h - 1);
+    return std::sqrt(sum / double(m.mean_curvature.size()));
+  };
+  PrepareOptions smooth;
+  smooth.curvature_smoothing_passes = 4;
+  EXPECT_LT(spread(*prepare_mesh(raw, smooth)), 0.5 * spread(*prepare_mesh(raw)));
+}
+
+TEST(PrepareMesh, StatisticsOfKnownShapes) {
+  const auto sphere = prepare_mesh(make_icosphere(1.0, 2));
+  EXPECT_EQ(sphere->statistics.components, 1u);
+  EXPECT_EQ(sphere->statistics.boundary_loops, 0u);
+  EXPECT_EQ(sphere->statistics.non_manifold_vertices, 0u);
+  const auto tube = prepare_mesh(make_cylinder(1.0, 2.0, 4, 16, false));
+  EXPECT_EQ(tube->statistics.boundary_loops, 2u);
+  EXPECT_EQ(tube->statistics.boundary_edges, 32u);
+  // Two spheres side by side: two components.
+  auto a = make_icosphere(1.0, 1);
+  const auto b = translated(make_icosphere(1.0, 1), 5, 0, 0);
+  const auto offset = std::uint32_t(a.positions.size());
+  a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
+  for (auto t : b.triangles) a.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  EXPECT_EQ(prepare_mesh(a)->statistics.components, 2u);
+}
+
+TEST(PrepareMesh, ReportsDegenerateAndNonManifoldFacesAndKeepsIds) {
+  RawMesh raw;
+  raw.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {5, 5, 5}};
+  // three triangles on the edge 0-1 (non-manifold), one degenerate, vertex 5 unused
+  raw.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}, {2, 2, 3}};
+  raw.source_faces = 4;
+  const auto mesh = prepare_mesh(raw);
+  EXPECT_EQ(mesh->statistics.non_manifold_edges, 1u);
+  EXPECT_EQ(mesh->statistics.dropped_faces, 1u);
+  EXPECT_EQ(mesh->statistics.faces, 3u);
+  EXPECT_EQ(mesh->statistics.duplicated_vertices, 3u);
+  // vertex 5 is unused, and vertex 4's only triangle was given copies of its corners
+  EXPECT_EQ(mesh->statistics.unreferenced_vertices, 2u);
+  EXPECT_EQ(mesh->warnings.size(), 2u);
+  // Input vertices keep their ids; copies are appended.
+  for (std::uint32_t v = 0; v < 6; ++v)
+    EXPECT_EQ(mesh->positions[v], Eigen::Vector3d(raw.positions[v][0], raw.positions[v][1], raw.positions[v][2]));
+  EXPECT_EQ(mesh->n_vertices(), 9u);
+  EXPECT_EQ(mesh->triangles[0], (std::array<std::uint32_t, 3>{0, 1, 2}));
+}
+
+TEST(PrepareMesh, HourglassVertexCountsAsNonManifold) {
+  // Two triangles touching at one vertex only: two fans at vertex 0.
+  RawMesh raw;
+  raw.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}};
+  raw.triangles = {{0, 1, 2}, {0, 3, 4}};
+  EXPECT_EQ(prepare_mesh(raw)->statistics.non_manifold_vertices, 1u);
+}
+
+TEST(PrepareMesh, RejectsMeshWithoutTriangles) {
+  RawMesh raw;
+  raw.positions = {{0, 0, 0}, {1, 0, 0}};
+  raw.triangles = {{0, 0, 1}};
+  EXPECT_THROW(prepare_mesh(raw), GeometryError);
+}
+
+TEST(PrepareMesh, MemoryIsReported) {
+  const auto mesh = prepare_mesh(make_icosphere(1.0, 4));
+  EXPECT_GT(mesh->memory_bytes(), mesh->statistics.faces * 50);
+  EXPECT_LT(mesh->memory_bytes(), mesh->statistics.faces * 1000);
+}
+
+}  // namespace
+}  // namespace featureline

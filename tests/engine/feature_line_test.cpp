@@ -1,0 +1,131 @@
+// The whole pipeline: closed loops, options, thread safety, JSON contract.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <thread>
+
+#include "api/feature_line_json.h"
+#include "engine/errors.h"
+#include "engine/feature_line.h"
+#include "tests/support/line_metrics.h"
+#include "tests/support/synthetic_meshes.h"
+
+namespace featureline {
+namespace {
+
+using namespace featureline::testing;
+
+TEST(FeatureLine, ClosedLoopAroundCylinderRimFollowsTheCrease) {
+  // A capped cylinder's rim is a sharp circular crease of radius 1 at z = 1.
+  const int segments = 48;
+  const auto raw = make_cylinder(1.0, 2.0, 12, segments, true);
+  const auto mesh = prepare_mesh(raw);
+  const std::uint32_t top = 12 * segments;  // first vertex of the top ring
+  FeatureLineRequest request;
+  request.keys = {top + 0, top + 16, top + 32};
+  request.closed = true;
+  const auto result = detect_feature_line(*mesh, request);
+  EXPECT_TRUE(result.closed);
+  ASSERT_EQ(result.initial.vertices.size(), std::size_t(segments));  // the whole rim, once
+  for (const auto& p : result.refined) {
+    EXPECT_NEAR(p.position.z(), 1.0, 1e-3);
+    EXPECT_NEAR(std::hypot(p.position.x(), p.position.y()), 1.0, 2e-3);
+  }
+  const double polygon = 2 * segments * std::sin(M_PI / segments);
+  EXPECT_NEAR(result.refined_length, polygon, 0.01 * polygon);
+  EXPECT_NEAR(result.initial.length, polygon, 1e-9);
+  EXPECT_EQ(result.pieces, 3u);
+}
+
+TEST(FeatureLine, FreeKeysLoopIsRefinedInTwoHalves) {
+  const auto raw = make_cylinder(1.0, 2.0, 12, 48, true);
+  const auto mesh = prepare_mesh(raw);
+  FeatureLineRequest request;
+  request.keys = {12 * 48 + 0, 12 * 48 + 20};
+  request.closed = true;
+  request.options.pin_interior_keys = false;
+  const auto result = detect_feature_line(*mesh, request);
+  EXPECT_EQ(result.pieces, 2u);
+  EXPECT_EQ(result.initial.vertices.size(), 48u);
+}
+
+TEST(FeatureLine, NoRefineReturnsTheInitialLineOnVertices) {
+  const auto field = make_ridge_field(31, 0.2, 1, 0.3, 0.25, 0.2);
+  const auto mesh = prepare_mesh(field.mesh);
+  FeatureLineRequest request;
+  request.keys = {nearest_vertex(field.mesh, -0.7, field.crest(-0.7)), nearest_vertex(field.mesh, 0.7, field.crest(0.7))};
+  request.options.refine = false;
+  const auto result = detect_feature_line(*mesh, request);
+  ASSERT_EQ(result.refined.size(), result.initial.vertices.size());
+  for (std::size_t i = 0; i < result.refined.size(); ++i)
+    EXPECT_EQ(result.refined[i].position, mesh->positions[result.initial.vertices[i]]);
+  EXPECT_FALSE(result.refined_by_snake);
+  EXPECT_NEAR(result.refined_length, result.initial.length, 1e-12);
+}
+
+TEST(FeatureLine, ConcurrentRequestsOnOneMeshAgree) {
+  const auto field = make_ridge_field(61, 0.2, 7, 0.3, 0.25, 0.3);
+  const std::shared_ptr<const PreparedMesh> mesh = prepare_mesh(field.mesh);
+  FeatureLineRequest request;
+  request.keys = {nearest_vertex(field.mesh, -0.8, field.crest(-0.8)), nearest_vertex(field.mesh, 0.8, field.crest(0.8))};
+  const auto reference = refined_positions(detect_feature_line(*mesh, request));
+  std::vector<std::thread> threads;
+  std::vector<int> same(8, 0);
+  for (int t = 0; t < 8; ++t)
+    threads.emplace_back([&, t] {
+      for (int i = 0; i < 5; ++i) same[t] += refined_positions(detect_feature_line(*mesh, request)) == reference;
+    });
+  for (auto& t : threads) t.join();
+  for (int t = 0; t < 8; ++t) EXPECT_EQ(same[t], 5);
+}
+
+TEST(FeatureLineJson, FieldNamesAreTheContract) {
+  const auto field = make_ridge_field(31, 0.2, 1, 0.3, 0.25, 0.2);
+  const auto mesh = prepare_mesh(field.mesh);
+  FeatureLineRequest request;
+  request.keys = {nearest_vertex(field.mesh, -0.7, field.crest(-0.7)), nearest_vertex(field.mesh, 0.7, field.crest(0.7))};
+  const auto json = feature_line_to_json(detect_feature_line(*mesh, request));
+  EXPECT_EQ(json["keys"], nlohmann::json(request.keys));
+  EXPECT_EQ(json["closed"], false);
+  EXPECT_EQ(json["initial"]["method"], "feature-path");
+  for (const char* k : {"vertices", "points", "length"}) EXPECT_TRUE(json["initial"].contains(k)) << k;
+  for (const char* k : {"points", "faces", "barycentric", "length"}) EXPECT_TRUE(json["refined"].contains(k)) << k;
+  EXPECT_EQ(json["refined"]["points"].size(), json["refined"]["faces"].size());
+  EXPECT_EQ(json["refined"]["points"].size(), json["refined"]["barycentric"].size());
+  for (const char* k : {"iterations", "strip_faces", "fallbacks", "timings_ms"}) EXPECT_TRUE(json["stats"].contains(k)) << k;
+  for (const char* k : {"initial", "strip", "flatten", "snake", "total"})
+    EXPECT_TRUE(json["stats"]["timings_ms"].contains(k)) << k;
+}
+
+TEST(FeatureLineJson, OptionsAreStrict) {
+  FeatureLineOptions options;
+  apply_options_json(nlohmann::json::parse(R"({"initial": "marching", "weights": {"delta": 3}, "snake": {"alpha": 0.5, "force": "paper"}})"),
+                     options);
+  EXPECT_EQ(options.initial.method, InitialMethod::marching);
+  EXPECT_EQ(options.initial.marching_delta, 3);
+  EXPECT_EQ(options.snake.alpha, 0.5);
+  EXPECT_EQ(options.snake.force, SnakeForce::paper);
+  auto error_of = [](const char* text) {
+    FeatureLineOptions o;
+    try {
+      apply_options_json(nlohmann::json::parse(text), o);
+    } catch (const InvalidInputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error_of(R"({"snake": {"alpah": 1}})"), "unknown option \"options.snake.alpah\"");
+  EXPECT_EQ(error_of(R"({"initial": "dijkstra"})"),
+            "\"options.initial\" must be one of marching, feature-path, geodesic, not \"dijkstra\"");
+  EXPECT_EQ(error_of(R"({"rings": 2.5})"), "\"options.rings\" must be an integer");
+  EXPECT_EQ(error_of(R"({"rings": 99})"), "\"options.rings\" must be between 0 and 8");
+  EXPECT_EQ(error_of(R"([1, 2])"), "\"options\" must be a JSON object");
+  // Round trip: the defaults printed are accepted back unchanged.
+  FeatureLineOptions defaults;
+  FeatureLineOptions again;
+  apply_options_json(options_to_json(defaults), again);
+  EXPECT_EQ(options_to_json(again), options_to_json(defaults));
+}
+
+}  // namespace
+}  // namespace featureline

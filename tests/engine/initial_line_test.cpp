@@ -1,0 +1,174 @@
+// Stage 1: initial lines by marching search, feature path and geodesic.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "engine/errors.h"
+#include "engine/initial_line.h"
+#include "engine/mesh_io.h"
+#include "tests/support/line_metrics.h"
+#include "tests/support/shared_data.h"
+#include "tests/support/synthetic_meshes.h"
+
+namespace featureline {
+namespace {
+
+using namespace featureline::testing;
+
+std::vector<std::uint32_t> keys_on_crest(const HeightField& field, std::initializer_list<double> xs) {
+  std::vector<std::uint32_t> keys;
+  for (double x : xs) keys.push_back(nearest_vertex(field.mesh, x, field.crest(x)));
+  return keys;
+}
+
+TEST(InitialLine, GeodesicOnPlaneIsNearlyStraight) {
+  const auto field = make_height_field([](double, double) { return 0.0; }, 41, 0.2, 5);
+  const auto mesh = prepare_mesh(field.mesh);
+  const std::vector<std::uint32_t> keys{nearest_vertex(field.mesh, -0.8, -0.7), nearest_vertex(field.mesh, 0.7, 0.8)};
+  InitialLineOptions options;
+  options.method = InitialMethod::geodesic;
+  const auto line = find_initial_line(*mesh, keys, false, options);
+  EXPECT_TRUE(is_edge_path(*mesh, line.vertices));
+  EXPECT_EQ(line.vertices.front(), keys[0]);
+  EXPECT_EQ(line.vertices.back(), keys[1]);
+  const double straight = (mesh->positions[keys[1]] - mesh->positions[keys[0]]).norm();
+  EXPECT_GE(line.length, straight);
+  EXPECT_LT(line.length, 1.12 * straight);  // an edge path on a jittered grid is a little longer
+  EXPECT_NEAR(line.length, path_length(*mesh, line.vertices), 1e-12);
+}
+
+TEST(InitialLine, EveryMethodReachesEveryKeyInOrder) {
+  const auto field = make_ridge_field(61, 0.2, 7, 0.3, 0.25, 0.3);
+  const auto mesh = prepare_mesh(field.mesh);
+  const auto keys = keys_on_crest(field, {-0.8, -0.2, 0.4, 0.8});
+  for (auto method : {InitialMethod::marching, InitialMethod::feature_path, InitialMethod::geodesic}) {
+    InitialLineOptions options;
+    options.method = method;
+    const auto line = find_initial_line(*mesh, keys, false, options);
+    ASSERT_EQ(line.key_indices.size(), keys.size());
+    for (std::size_t k = 0; k < keys.size(); ++k) EXPECT_EQ(line.vertices[line.key_indices[k]], keys[k]);
+    EXPECT_TRUE(is_edge_path(*mesh, line.vertices)) << to_string(method);
+    const std::set<std::uint32_t> unique(line.vertices.begin(), line.vertices.end());
+    EXPECT_EQ(unique.size(), line.vertices.size()) << "a vertex is visited twice by " << to_string(method);
+  }
+}
+
+TEST(InitialLine, FeaturePathHugsSharpCreaseUnlikeGeodesicShortcut) {
+  // A roof crease with keys on it: the feature path stays on the crease.
+  const auto field = make_crease_field(61, 0.2, 11, 0.25, 0.3);
+  const auto mesh = prepare_mesh(field.mesh);
+  const auto keys = keys_on_crest(field, {-0.8, 0.8});
+  InitialLineOptions options;
+  const auto line = find_initial_line(*mesh, keys, false, options);
+  std::vector<Eigen::Vector3d> points;
+  for (auto v : line.vertices) points.push_back(mesh->positions[v]);
+  const auto d = crest_distance(field, points);
+  EXPECT_LT(d.max, 1.0 * field.spacing);  // within one grid spacing of the crease everywhere
+}
+
+TEST(InitialLine, LiteralMarchingFallsBackOnSmoothRidgeAndSaysSo) {
+  // Measured fact: with f_C comparing against the current vertex, the search follows a
+  // curvature iso-line and misses the end key; the robust search detects it and falls back.
+  const auto field = make_ridge_field(61, 0.2, 7, 0.3, 0.25, 0.3);
+  const auto mesh = prepare_mesh(field.mesh);
+  std::size_t fallbacks = 0;
+  for (double y_offset : {0.0, 0.05, -0.05}) {
+    const std::vector<std::uint32_t> keys{nearest_vertex(field.mesh, -0.8, field.crest(-0.8) + y_offset),
+                                          nearest_vertex(field.mesh, 0.8, field.crest(0.8) + y_offset)};
+    InitialLineOptions options;
+    options.method = InitialMethod::marching;
+    options.marching_curvature_term = MarchingCurvatureTerm::similar_to_current;
+    const auto line = find_initial_line(*mesh, keys, false, options);
+    EXPECT_TRUE(is_edge_path(*mesh, line.vertices));
+    EXPECT_EQ(line.vertices.back(), keys[1]);
+    fallbacks += line.fallbacks.size();
+    for (const auto& f : line.fallbacks) {
+      EXPECT_EQ(f.to, InitialMethod::feature_path);
+      EXPECT_FALSE(f.reason.empty());
+    }
+  }
+  EXPECT_GT(fallbacks, 0u);
+  // Without fallback the same failure is an error naming the segment.
+  const std::vector<std::uint32_t> keys{nearest_vertex(field.mesh, -0.8, field.crest(-0.8)),
+                                        nearest_vertex(field.mesh, 0.8, field.crest(0.8))};
+  InitialLineOptions strict;
+  strict.method = InitialMethod::marching;
+  strict.marching_curvature_term = MarchingCurvatureTerm::similar_to_current;
+  strict.fallback = false;
+  std::string why;
+  if (!marching_search(*mesh, keys[0], keys[1], strict, &why)) {
+    EXPECT_THROW(find_initial_line(*mesh, keys, false, strict), GeometryError);
+    EXPECT_FALSE(why.empty());
+  }
+}
+
+TEST(InitialLine, ClosedLoopDoesNotRetraceItself) {
+  // Two keys on a capsule's equator: the loop must go round, not back along the same path.
+  const auto raw = make_capsule(1.0, 2.0, 32, 8, 8);
+  const auto ring = capsule_equator(32, 8, 8);
+  const auto mesh = prepare_mesh(raw);
+  const auto line = find_initial_line(*mesh, {ring[0], ring[16]}, true);
+  const std::set<std::uint32_t> unique(line.vertices.begin(), line.vertices.end());
+  EXPECT_EQ(unique.size(), line.vertices.size());
+  EXPECT_TRUE(is_edge_path(*mesh, line.vertices));
+  EXPECT_GT(line.length, 0.9 * 2 * M_PI);  // around the circumference of radius 1
+  EXPECT_EQ(line.key_indices.size(), 2u);
+}
+
+TEST(InitialLine, FollowsFandiskCreaseChainExactly) {
+  const auto mesh = prepare_mesh(read_mesh_file(require_shared_mesh("fandisk.off")));
+  // Crease edges: dihedral angle above 30 degrees. Find a long straight-ish run of them.
+  const TriMesh& m = mesh->mesh;
+  std::vector<std::vector<std::uint32_t>> crease(mesh->n_vertices());
+  for (auto e : m.edges()) {
+    if (m.is_boundary(e)) continue;
+    if (std::abs(m.calc_dihedral_angle(e)) > 30.0 * M_PI / 180.0) {
+      const auto a = std::uint32_t(m.from_vertex_handle(m.halfedge_handle(e, 0)).idx());
+      const auto b = std::uint32_t(m.to_vertex_handle(m.halfedge_handle(e, 0)).idx());
+      crease[a].push_back(b);
+      crease[b].push_back(a);
+    }
+  }
+  // Walk a chain of crease vertices of valence 2 in the crease graph.
+  std::vector<std::uint32_t> chain;
+  for (std::uint32_t v = 0; v < mesh->n_vertices() && chain.size() < 12; ++v) {
+    if (crease[v].size() != 2) continue;
+    chain = {v};
+    std::uint32_t previous = v, current = crease[v][0];
+    while (crease[current].size() == 2 && chain.size() < 30) {
+      chain.push_back(current);
+      const auto next = crease[current][0] == previous ? crease[current][1] : crease[current][0];
+      previous = current;
+      current = next;
+    }
+  }
+  ASSERT_GE(chain.size(), 12u) << "no crease chain found on fandisk";
+  const std::vector<std::uint32_t> keys{chain.front(), chain.back()};
+  const auto line = find_initial_line(*mesh, keys, false);
+  EXPECT_EQ(line.vertices, chain);
+}
+
+TEST(InitialLine, BadKeysAreClearErrors) {
+  const auto mesh = prepare_mesh(make_icosphere(1.0, 2));
+  EXPECT_THROW(find_initial_line(*mesh, {0}, false), InvalidInputError);
+  EXPECT_THROW(find_initial_line(*mesh, {0, 100000}, false), InvalidInputError);
+  EXPECT_THROW(find_initial_line(*mesh, {3, 3}, false), InvalidInputError);
+  try {
+    find_initial_line(*mesh, {0, 999}, false);
+    FAIL() << "expected an error";
+  } catch (const InvalidInputError& e) {
+    EXPECT_EQ(std::string(e.what()), "key 1 is vertex 999, but the mesh has only 162 vertices");
+  }
+  // Keys on different components.
+  auto a = make_icosphere(1.0, 1);
+  const auto b = translated(make_icosphere(1.0, 1), 5, 0, 0);
+  const auto offset = std::uint32_t(a.positions.size());
+  a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
+  for (auto t : b.triangles) a.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const auto two = prepare_mesh(a);
+  EXPECT_THROW(find_initial_line(*two, {0, offset + 1}, false), GeometryError);
+}
+
+}  // namespace
+}  // namespace featureline

@@ -1,0 +1,29 @@
+// Measures of lines used by the tests and benchmarks: distance to an analytic crest,
+// total turning angle, adjacency of vertex paths.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "engine/feature_line.h"
+#include "tests/support/synthetic_meshes.h"
+
+namespace featureline::testing {
+
+/// Sum of the angles between consecutive segments (radians): 0 for a straight line.
+double total_turning(const std::vector<Eigen::Vector3d>& points);
+
+/// Mean and maximum xy distance of points to the field's crest curve.
+struct CrestDistance {
+  double mean = 0, max = 0;
+};
+CrestDistance crest_distance(const HeightField& field, const std::vector<Eigen::Vector3d>& points);
+
+/// Positions of a result's refined points.
+std::vector<Eigen::Vector3d> refined_positions(const FeatureLineResult& result);
+
+/// True when consecutive vertices of `path` are mesh neighbours.
+bool is_edge_path(const PreparedMesh& mesh, const std::vector<std::uint32_t>& path);
+
+}  // namespace featureline::testing
