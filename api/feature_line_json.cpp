@@ -119,6 +119,7 @@ void apply_options_json(const json& j, FeatureLineOptions& o) {
     sr.integer("resample_every", so.resample_every, 1, 1000);
     sr.choice("force", so.force, parse_snake_force, "paper, smooth");
     sr.boolean("normal_force_only", so.normal_force_only);
+    sr.number("sharp_crest_drop", so.sharp_crest_drop, 0, 0.99);
     sr.finish();
   }
   r.finish();
@@ -154,7 +155,8 @@ json options_to_json(const FeatureLineOptions& o) {
         {"spacing", o.snake.spacing},
         {"resample_every", o.snake.resample_every},
         {"force", to_string(o.snake.force)},
-        {"normal_force_only", o.snake.normal_force_only}}},
+        {"normal_force_only", o.snake.normal_force_only},
+        {"sharp_crest_drop", o.snake.sharp_crest_drop}}},
   };
 }
 

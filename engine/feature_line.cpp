@@ -112,12 +112,20 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
         result.warnings.push_back("the strip around line vertices " + std::to_string(sub.front()) + ".." +
                                   std::to_string(sub.back()) + " folds over when flattened; refined where it is valid");
       t0 = Clock::now();
-      const SnakeResult snake = refine_with_snake(pm, strip, flat, snake_options);
-      points = map_to_surface(pm, strip, snake.points);
+      try {
+        const SnakeResult snake = refine_with_snake(pm, strip, flat, snake_options);
+        points = map_to_surface(pm, strip, snake.points);
+        result.iterations += snake.iterations;
+        result.refined_by_snake = true;
+      } catch (const GeometryError& e) {
+        // A pinned end whose every strip triangle folded or distorted: keep this piece's
+        // initial line rather than failing the whole line, and say so.
+        for (auto v : sub) points.push_back(surface_point_at_vertex(pm, v));
+        result.warnings.push_back("line vertices " + std::to_string(sub.front()) + ".." + std::to_string(sub.back()) +
+                                  " were not refined: " + e.what());
+      }
       result.timings.snake_ms += ms_since(t0);
-      result.iterations += snake.iterations;
       result.strip_faces += strip.triangles.size();
-      result.refined_by_snake = true;
     }
     ++result.pieces;
     // Pieces meet at pinned vertices: keep the shared point once.

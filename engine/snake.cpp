@@ -92,6 +92,54 @@ Eigen::SparseMatrix<double> stiffness(std::size_t n, double alpha, double beta) 
   return A;
 }
 
+// At a sharp crest (a crease vertex, where |C| drops steeply on both sides of the line) the
+// potential has a kink, and any average of the one-sided gradients points towards the flatter
+// side, pushing the line off the crease. There the gradient's component across the line is
+// set to zero, so the crest itself is the force's zero. Smooth ridges, whose neighbours drop
+// only a little, keep their interpolated gradients and with them sub-edge accuracy.
+void zero_gradient_across_sharp_crests(const FeatureStrip& strip, const FlatStrip& flat, const std::vector<double>& potential,
+                                       double drop, std::vector<Eigen::Vector2d>& gradient) {
+  if (!(drop > 0) || drop >= 1) return;
+  const std::size_t nv = strip.vertices.size();
+  // Tangent of the line at each line vertex, then at every strip vertex from the nearest line vertex.
+  std::vector<Eigen::Vector2d> line_tangent(strip.line.size());
+  for (std::size_t i = 0; i < strip.line.size(); ++i) {
+    const auto a = strip.line[i == 0 ? 0 : i - 1], b = strip.line[std::min(i + 1, strip.line.size() - 1)];
+    line_tangent[i] = (flat.uv[b] - flat.uv[a]).normalized();
+  }
+  std::vector<double> highest_left(nv, -1), highest_right(nv, -1);
+  std::vector<Eigen::Vector2d> normal(nv, Eigen::Vector2d::Zero());
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (!flat.placed[v]) continue;
+    std::size_t nearest = 0;
+    double best = HUGE_VAL;
+    for (std::size_t i = 0; i < strip.line.size(); ++i) {
+      const double d = (flat.uv[strip.line[i]] - flat.uv[v]).squaredNorm();
+      if (d < best) best = d, nearest = i;
+    }
+    normal[v] = Eigen::Vector2d(-line_tangent[nearest].y(), line_tangent[nearest].x());
+  }
+  // Highest potential among the neighbours on each side of the line (through triangle edges).
+  for (std::size_t t = 0; t < strip.triangles.size(); ++t) {
+    if (!flat.triangle_valid[t]) continue;
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 3; ++j) {
+        if (j == k) continue;
+        const auto v = strip.triangles[t][k], w = strip.triangles[t][j];
+        const Eigen::Vector2d d = (flat.uv[w] - flat.uv[v]).normalized();
+        const double across = d.dot(normal[v]);
+        if (across > 0.5) highest_left[v] = std::max(highest_left[v], potential[w]);
+        if (across < -0.5) highest_right[v] = std::max(highest_right[v], potential[w]);
+      }
+  }
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (highest_left[v] < 0 || highest_right[v] < 0 || !(potential[v] > 0)) continue;
+    const double limit = (1 - drop) * potential[v];
+    if (highest_left[v] <= limit && highest_right[v] <= limit)
+      gradient[v] -= gradient[v].dot(normal[v]) * normal[v];
+  }
+}
+
 }  // namespace
 
 std::string to_string(SnakeForce force) { return force == SnakeForce::paper ? "paper" : "smooth"; }
@@ -160,6 +208,7 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
     }
     for (std::size_t v = 0; v < nv; ++v)
       if (weight[v] > 0) vertex_gradient[v] /= weight[v];
+    zero_gradient_across_sharp_crests(strip, flat, potential, o.sharp_crest_drop, vertex_gradient);
   }
   auto force_at = [&](const StripPoint& p) -> Eigen::Vector2d {
     if (o.force == SnakeForce::paper) return triangle_gradient[p.triangle];
@@ -192,7 +241,9 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
   for (std::size_t i = 0; i + 1 < strip.line.size(); ++i) {
     const Eigen::Vector2d a = flat.uv[strip.line[i]], b = flat.uv[strip.line[i + 1]];
     const int pieces = std::max(1, int(std::lround((b - a).norm() / h)));
-    StripPoint last = i == 0 ? points.back() : point_at_vertex(strip.line[i]);
+    // Restart at each line vertex when it has a valid triangle; otherwise walk on from the
+    // previous sample.
+    StripPoint last = i == 0 || triangle_at[strip.line[i]] < 0 ? points.back() : point_at_vertex(strip.line[i]);
     for (int k = 1; k < pieces; ++k) {
       StripPoint p = last;
       walk(strip, flat, last.triangle, a + (b - a) * (double(k) / pieces), p);

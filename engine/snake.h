@@ -47,6 +47,10 @@ struct SnakeOptions {
   /// points along the line, bunching them at curvature maxima (vertices) and making the
   /// discrete line jagged; the paper applies the whole gradient (false).
   bool normal_force_only = true;
+  /// smooth force only: a vertex whose neighbours on both sides of the line have at most
+  /// (1 - sharp_crest_drop) of its |C|^p is a sharp crest (a crease); its gradient across the
+  /// line is zeroed so the crease itself is where the force vanishes. 0 disables.
+  double sharp_crest_drop = 0.5;
   /// +1: attract to ridges (H > 0) only, -1: valleys only, 0: |H| as in the paper.
   double feature_sign = 0;
 };
