@@ -37,7 +37,8 @@ std::string quote_token(std::string_view token);
 /// Splits text into whitespace-separated tokens while tracking line numbers.
 class TokenScanner {
  public:
-  explicit TokenScanner(std::string_view text, std::size_t start = 0) : text_(text), pos_(start) {}
+  explicit TokenScanner(std::string_view text, std::size_t start = 0, std::size_t first_line = 1)
+      : text_(text), pos_(start), line_(first_line) {}
   /// Next token, or std::nullopt at the end. `line()` then is the token's line (1-based).
   std::optional<std::string_view> next();
   /// Skips the rest of the current line (after the last token returned).
@@ -49,7 +50,6 @@ class TokenScanner {
   std::string_view text_;
   std::size_t pos_ = 0;
   std::size_t line_ = 1;
-  std::size_t token_line_ = 1;
 };
 
 // ---- welding -------------------------------------------------------------------------

@@ -314,17 +314,19 @@ RawMesh read_off(std::string_view bytes, const ReadMeshOptions& options) {
     if (!t) {
       throw MeshFormatError("OFF file ends after " + std::to_string(f) + " of its " + std::to_string(n_faces) + " faces.");
     }
+    const std::size_t face_line = tokens.line();
+    const auto face_where = [&] { return " (line " + std::to_string(face_line) + ")"; };
     std::int64_t size = 0;
     if (!parse_integer(*t, size) || size < 0) {
-      throw MeshFormatError("OFF face " + std::to_string(f + 1) + line_text() + " has an invalid vertex count " +
+      throw MeshFormatError("OFF face " + std::to_string(f + 1) + face_where() + " has an invalid vertex count " +
                             quote_token(*t) + ".");
     }
     if (size < 3) {
-      throw MeshFormatError("OFF face " + std::to_string(f + 1) + line_text() + " has " + std::to_string(size) +
+      throw MeshFormatError("OFF face " + std::to_string(f + 1) + face_where() + " has " + std::to_string(size) +
                             " vertices; a face needs at least 3.");
     }
     if (static_cast<std::uint64_t>(size) > (bytes.size() - tokens.position()) / 2 + 1) {
-      throw MeshFormatError("OFF face " + std::to_string(f + 1) + line_text() + " claims " + std::to_string(size) +
+      throw MeshFormatError("OFF face " + std::to_string(f + 1) + face_where() + " claims " + std::to_string(size) +
                             " vertices, more than the rest of the file can hold.");
     }
     triangles += static_cast<std::uint64_t>(size) - 2;
@@ -335,12 +337,12 @@ RawMesh read_off(std::string_view bytes, const ReadMeshOptions& options) {
       const auto it = next();
       std::int64_t index = 0;
       if (!it || !parse_integer(*it, index)) {
-        throw MeshFormatError("OFF face " + std::to_string(f + 1) + line_text() + " has " +
+        throw MeshFormatError("OFF face " + std::to_string(f + 1) + face_where() + " has " +
                               (it ? "an invalid vertex index " + quote_token(*it) : std::string("too few vertex indices")) +
                               ".");
       }
       if (index < 0 || static_cast<std::uint64_t>(index) >= n_vertices) {
-        throw MeshFormatError("OFF face " + std::to_string(f + 1) + line_text() + " refers to vertex index " +
+        throw MeshFormatError("OFF face " + std::to_string(f + 1) + face_where() + " refers to vertex index " +
                               std::to_string(index) + " but the file has only " + std::to_string(n_vertices) +
                               " vertices (indices start at 0).");
       }
@@ -425,6 +427,7 @@ struct PlyHeader {
   PlyEncoding encoding = PlyEncoding::ascii;
   std::vector<PlyElement> elements;
   std::size_t data_start = 0;
+  std::size_t header_lines = 0;
 };
 
 PlyHeader parse_ply_header(std::string_view bytes) {
@@ -512,6 +515,7 @@ PlyHeader parse_ply_header(std::string_view bytes) {
   }
   if (!have_format) throw MeshFormatError("PLY header has no format line.");
   header.data_start = pos;
+  header.header_lines = line_no;
   return header;
 }
 
@@ -519,7 +523,10 @@ PlyHeader parse_ply_header(std::string_view bytes) {
 class PlyBodyReader {
  public:
   PlyBodyReader(std::string_view bytes, const PlyHeader& header)
-      : bytes_(bytes), encoding_(header.encoding), pos_(header.data_start), tokens_(bytes, header.data_start) {}
+      : bytes_(bytes),
+        encoding_(header.encoding),
+        pos_(header.data_start),
+        tokens_(bytes, header.data_start, header.header_lines + 1) {}
 
   bool binary() const { return encoding_ != PlyEncoding::ascii; }
 
@@ -710,13 +717,14 @@ RawMesh read_ply(std::string_view bytes, const ReadMeshOptions& options) {
   canonical += "ply\nformat ";
   canonical += binary ? (out_encoding == PlyEncoding::binary_be ? "binary_big_endian" : "binary_little_endian") : "ascii";
   canonical += " 1.0\nelement vertex " + std::to_string(vertex->count) + "\n";
-  // Coordinates keep their own type (OpenMesh converts to float); ASCII writes the tokens as found.
-  for (const PlyProperty* p : {px, py, pz}) {
-    canonical += std::string("property ") + ply_type_name(p->type) + " " + p->name + "\n";
-  }
+  // OpenMesh 9 reads coordinates only from float/double properties and list counts only as
+  // uchar/uint8/int, so the canonical stream uses float coordinates (OpenMesh stores floats
+  // anyway; ASCII keeps the validated tokens) and int counts and indices.
+  canonical += "property float x\nproperty float y\nproperty float z\n";
+  const PlyType index_type = vertex->count <= std::uint64_t(std::numeric_limits<std::int32_t>::max()) ? PlyType::int32 : PlyType::uint32;
   if (face) {
-    canonical += "element face " + std::to_string(face->count) + "\nproperty list " +
-                 ply_type_name(face_list->count_type) + " " + ply_type_name(face_list->type) + " vertex_indices\n";
+    canonical += "element face " + std::to_string(face->count) + "\nproperty list int " + ply_type_name(index_type) +
+                 " vertex_indices\n";
   }
   canonical += "end_header\n";
 
@@ -777,9 +785,7 @@ RawMesh read_ply(std::string_view bytes, const ReadMeshOptions& options) {
           }
         }
         if (binary) {
-          append_binary(canonical, px->type, xyz[0], out_encoding);
-          append_binary(canonical, py->type, xyz[1], out_encoding);
-          append_binary(canonical, pz->type, xyz[2], out_encoding);
+          for (double c : xyz) append_binary(canonical, PlyType::float32, c, out_encoding);
         } else {
           canonical += tok[0];
           canonical += ' ';
@@ -824,7 +830,7 @@ RawMesh read_ply(std::string_view bytes, const ReadMeshOptions& options) {
           hash.add(static_cast<std::uint64_t>(n));
           expected.corners += static_cast<std::size_t>(n);
           if (binary) {
-            append_binary(canonical, p.count_type, double(n), out_encoding);
+            append_binary(canonical, PlyType::int32, double(n), out_encoding);
           } else {
             canonical += std::to_string(n);
           }
@@ -836,7 +842,7 @@ RawMesh read_ply(std::string_view bytes, const ReadMeshOptions& options) {
             }
             hash.add(static_cast<std::uint64_t>(index));
             if (binary) {
-              append_binary(canonical, p.type, double(index), out_encoding);
+              append_binary(canonical, index_type, double(index), out_encoding);
             } else {
               canonical += ' ';
               canonical += std::to_string(index);
