@@ -528,8 +528,14 @@ RawMesh read_stl(std::string_view bytes, const ReadMeshOptions& options) {
   if (bytes.size() >= 84 && 84 + 50 * std::uint64_t(read_le32(bytes.data() + 80)) == bytes.size()) {
     return read_stl_binary(bytes, options);
   }
-  const std::string_view text = trim(bytes.substr(0, 1024));
-  if (starts_with(text, "solid") && (text.size() == 5 || is_space(text[5]))) return read_stl_ascii(bytes, options);
+  // ASCII only when the start reads as text: binary files may also begin with "solid".
+  const std::string_view head = bytes.substr(0, 1024);
+  const std::string_view text = trim(head);
+  const bool textual = std::none_of(head.begin(), head.end(), [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return u < 0x20 && !is_space(c);
+  });
+  if (textual && starts_with(text, "solid") && (text.size() == 5 || is_space(text[5]))) return read_stl_ascii(bytes, options);
   if (bytes.size() < 84) {
     throw MeshFormatError("STL file has only " + std::to_string(bytes.size()) +
                           " bytes: too short for a binary STL header (84 bytes) and it does not start with 'solid'.");

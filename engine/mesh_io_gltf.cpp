@@ -223,7 +223,7 @@ std::size_t component_size(int component_type) {
   }
 }
 
-/// A bounds-checked view of an accessor's elements. `data == nullptr` means all zeros (no bufferView).
+/// A bounds-checked view of an accessor's elements.
 struct AccessorView {
   const unsigned char* data = nullptr;
   std::size_t stride = 0;
@@ -233,7 +233,6 @@ struct AccessorView {
   bool normalized = false;
 
   double component(std::size_t element, int c) const {
-    if (data == nullptr) return 0.0;
     const unsigned char* p = data + element * stride + std::size_t(c) * component_size(component_type);
     switch (component_type) {
       case TINYGLTF_COMPONENT_TYPE_FLOAT: { float v; std::memcpy(&v, p, 4); return v; }
@@ -273,7 +272,9 @@ AccessorView view_accessor(const tinygltf::Model& model, int index, int expected
   if (csize == 0 || view.components <= 0) throw MeshFormatError(name + " has an invalid component type.");
   if (view.count == 0) throw MeshFormatError(name + " has no elements.");
   const std::size_t element_size = csize * std::size_t(view.components);
-  if (accessor.bufferView < 0) return view;  // all zeros, as the spec says
+  // Without a bufferView the spec means "all zeros": useless as geometry, and its count would be
+  // the only thing bounding the allocation, so it is refused.
+  if (accessor.bufferView < 0) throw MeshFormatError(name + " has no bufferView (all-zero data is not usable geometry).");
   const ByteRange range = buffer_view_bytes(model, accessor.bufferView, name);
   const tinygltf::BufferView& buffer_view = model.bufferViews[static_cast<std::size_t>(accessor.bufferView)];
   view.stride = buffer_view.byteStride != 0 ? buffer_view.byteStride : element_size;

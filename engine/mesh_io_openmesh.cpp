@@ -742,6 +742,7 @@ RawMesh read_ply(std::string_view bytes, const ReadMeshOptions& options) {
     const bool is_face = &element == face;
     const bool is_strip = !face && &element == strips;
     if (!is_vertex && !is_face && !is_strip) {
+      if (element.properties.empty()) continue;  // records without properties occupy no bytes
       if (vertex_done && (face ? faces_done : strips_done)) break;  // nothing needed after this
       const std::string name = element.name;
       std::uint64_t r = 0;

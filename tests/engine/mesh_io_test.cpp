@@ -705,7 +705,9 @@ TEST(MeshIoStl, BinaryHeaderChecks) {
   const std::string stl = make_binary_stl({{0, 0, 0, 1, 0, 0, 0, 1, 0}, {1, 0, 0, 1, 1, 0, 0, 1, 0}});
   EXPECT_THROW_EXACT(read_mesh(stl.substr(0, stl.size() - 10), MeshFormat::stl), MeshFormatError,
                      "Binary STL header claims 2 triangles (184 bytes) but the file has only 174 bytes.");
-  const RawMesh padded = read_mesh(stl + "xyz", MeshFormat::stl);
+  // Trailing bytes, and a header starting with "solid": still binary.
+  const RawMesh padded = read_mesh(make_binary_stl({{0, 0, 0, 1, 0, 0, 0, 1, 0}, {1, 0, 0, 1, 1, 0, 0, 1, 0}}, "solid x") + "xyz",
+                                   MeshFormat::stl);
   EXPECT_EQ(padded.triangles.size(), 2u);
   ASSERT_EQ(padded.warnings.size(), 1u);
   EXPECT_EQ(padded.warnings[0], "Binary STL has 3 bytes after its 2 triangles; they were ignored.");
@@ -879,6 +881,12 @@ TEST(MeshIoGltf, HostileAccessorsAndViews) {
   EXPECT_THROW_EXACT(read_mesh(make_glb(glb_json, bin), MeshFormat::glb), MeshFormatError,
                      "GLB mesh 0 primitive 0 POSITION: accessor 0 (1000 elements of 12 bytes, stride 12, offset 0) points "
                      "past the end of its bufferView (48 bytes).");
+
+  std::string no_view = json;
+  const std::string view_member = "\"bufferView\":0,\"componentType\":5126";
+  no_view.replace(no_view.find(view_member), view_member.size(), "\"componentType\":5126");
+  EXPECT_THROW_EXACT(read_mesh(no_view, MeshFormat::gltf), MeshFormatError,
+                     "glTF mesh 0 primitive 0 POSITION: accessor 0 has no bufferView (all-zero data is not usable geometry).");
 
   std::string view_past_end = json;
   view_past_end.replace(view_past_end.find("\"byteLength\":48"), 15, "\"byteLength\":4800");
