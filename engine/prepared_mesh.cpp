@@ -7,6 +7,10 @@
 #include <sstream>
 #include <unordered_map>
 
+#include <OpenMesh/Core/System/omstream.hh>
+
+#include <mutex>
+
 #include "engine/errors.h"
 
 namespace featureline {
@@ -194,6 +198,10 @@ std::size_t PreparedMesh::memory_bytes() const {
 
 std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options) {
   const auto start = Clock::now();
+  // OpenMesh prints add_face failures ("patch re-linking failed") to std::cerr; we handle and
+  // report every such face ourselves, so its stream is switched off once for the process.
+  static std::once_flag quiet;
+  std::call_once(quiet, [] { omerr().disable(); });
   if (options.curvature_smoothing_passes < 0 || options.curvature_smoothing_passes > 100)
     throw InvalidInputError("curvature_smoothing_passes must be between 0 and 100");
   auto prepared = std::make_shared<PreparedMesh>();
