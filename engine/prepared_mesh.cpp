@@ -243,7 +243,10 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
     TriMesh::FaceHandle face;
     if (fits) face = mesh.add_face(corners);
     if (!face.is_valid()) {
-      for (int k = 0; k < 3; ++k) corners[k] = mesh.add_vertex(mesh.point(corners[k]));
+      for (int k = 0; k < 3; ++k) {
+        const TriMesh::Point copy = mesh.point(corners[k]);  // add_vertex may reallocate the points
+        corners[k] = mesh.add_vertex(copy);
+      }
       stats.duplicated_vertices += 3;
       ++split_faces;
       face = mesh.add_face(corners);
