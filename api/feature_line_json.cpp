@@ -219,9 +219,8 @@ json mesh_info_to_json(const PreparedMesh& m, double load_ms) {
       {"curvature",
        {{"min", s.curvature_min},
         {"max", s.curvature_max},
-        {"abs_p50", s.abs_curvature_p50},
-        {"abs_p90", s.abs_curvature_p90},
-        {"abs_p99", s.abs_curvature_p99}}},
+        {"percentiles",  // of |H|
+         {{"p50", s.abs_curvature_p50}, {"p90", s.abs_curvature_p90}, {"p99", s.abs_curvature_p99}}}}},
       {"memory_bytes", m.memory_bytes()},
       {"warnings", m.warnings},
       {"timings_ms", {{"load", load_ms}, {"prepare", m.prepare_ms}}},

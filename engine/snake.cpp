@@ -4,6 +4,8 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include "engine/errors.h"
 
@@ -287,6 +289,7 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
   Eigen::SparseMatrix<double> A;
   std::size_t factored_size = 0;
   Eigen::VectorXd x, y, rhs_x, rhs_y;
+  std::vector<Eigen::Vector2d> prev_disp;
   for (int iteration = 0; iteration < o.max_iterations; ++iteration) {
     if (iteration % o.resample_every == 0) resample();
     const std::size_t n = points.size();
@@ -331,14 +334,52 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
     const Eigen::VectorXd new_x = solver.solve(rhs_x), new_y = solver.solve(rhs_y);
     double moved = 0;
     for (std::size_t i = 1; i + 1 < n; ++i) {
-      const Eigen::Vector2d target(new_x[Eigen::Index(i - 1)] * unit, new_y[Eigen::Index(i - 1)] * unit);
+      Eigen::Vector2d target(new_x[Eigen::Index(i - 1)] * unit, new_y[Eigen::Index(i - 1)] * unit);
       if (!target.allFinite()) continue;
+      if (std::getenv("SNAKE_NORMAL")) {
+        const Eigen::Vector2d chord(x[Eigen::Index(i + 1)] - x[Eigen::Index(i - 1)], y[Eigen::Index(i + 1)] - y[Eigen::Index(i - 1)]);
+        if (chord.norm() > 0) { const Eigen::Vector2d t = chord.normalized(); const Eigen::Vector2d d = target - points[i].uv; target = points[i].uv + d - d.dot(t) * t; }
+      }
       const Eigen::Vector2d before = points[i].uv;
       walk(strip, flat, points[i].triangle, target, points[i]);
       moved += (points[i].uv - before).norm() / unit;
     }
     result.iterations = iteration + 1;
     result.last_displacement = moved / double(m);
+    if (std::getenv("SNAKE_TRACE")) {
+      double mx = 0; int capped = 0;
+      std::vector<double> d;
+      for (std::size_t i = 1; i + 1 < n; ++i) {
+        const Eigen::Vector2d target(new_x[Eigen::Index(i - 1)], new_y[Eigen::Index(i - 1)]);
+        const double di = (target - Eigen::Vector2d(x[Eigen::Index(i)], y[Eigen::Index(i)])).norm();
+        d.push_back(di); mx = std::max(mx, di);
+        Eigen::Vector2d st = o.tau * o.kappa * force_at(points[i]);
+        if (st.norm() > o.max_step) ++capped;
+      }
+      std::sort(d.begin(), d.end());
+      int reversed = 0; double dotsum = 0, nsum = 0;
+      std::vector<Eigen::Vector2d> disp;
+      for (std::size_t i = 1; i + 1 < n; ++i) disp.push_back(Eigen::Vector2d(new_x[Eigen::Index(i - 1)], new_y[Eigen::Index(i - 1)]) - Eigen::Vector2d(x[Eigen::Index(i)], y[Eigen::Index(i)]));
+      if (prev_disp.size() == disp.size()) for (std::size_t i = 0; i < disp.size(); ++i) { if (disp[i].dot(prev_disp[i]) < 0) ++reversed; dotsum += disp[i].dot(prev_disp[i]); nsum += disp[i].squaredNorm(); }
+      prev_disp = disp;
+      // net displacement measure
+      Eigen::Vector2d tot = Eigen::Vector2d::Zero(); for (auto& q : disp) tot += q;
+      double tang = 0, norm_ = 0;
+      for (std::size_t i = 1; i + 1 < n; ++i) { Eigen::Vector2d c = Eigen::Vector2d(x[Eigen::Index(i+1)]-x[Eigen::Index(i-1)], y[Eigen::Index(i+1)]-y[Eigen::Index(i-1)]).normalized(); tang += std::abs(disp[i-1].dot(c)); norm_ += std::abs(cross2(c, disp[i-1])); }
+      std::fprintf(stderr, "   reversed %d corr %.2f tang %.2e norm %.2e ", reversed, nsum > 0 ? dotsum / nsum : 0.0, tang/double(m), norm_/double(m));
+      if (std::getenv("SNAKE_DUMP") && iteration >= std::atoi(std::getenv("SNAKE_DUMP")) && iteration < std::atoi(std::getenv("SNAKE_DUMP")) + 2) {
+        for (std::size_t i = 1; i + 1 < n; ++i) {
+          Eigen::Vector2d st = o.tau * o.kappa * force_at(points[i]);
+          Eigen::Vector2d c = Eigen::Vector2d(x[Eigen::Index(i+1)]-x[Eigen::Index(i-1)], y[Eigen::Index(i+1)]-y[Eigen::Index(i-1)]).normalized();
+          Eigen::Vector2d tgt(new_x[Eigen::Index(i - 1)], new_y[Eigen::Index(i - 1)]);
+          Eigen::Vector2d now = points[i].uv / unit;
+          std::fprintf(stderr, "  p%2zu uv %8.3f %8.3f gap %.3f F %.3f Fn %.3f dispT %+.2e dispN %+.2e clampedby %.2e bary %.2f %.2f %.2f\n", i, x[Eigen::Index(i)], y[Eigen::Index(i)],
+            std::hypot(x[Eigen::Index(i)]-x[Eigen::Index(i-1)], y[Eigen::Index(i)]-y[Eigen::Index(i-1)]), st.norm(), cross2(c, st),
+            disp[i-1].dot(c), cross2(c, disp[i-1]), (tgt - now).norm(), points[i].barycentric[0], points[i].barycentric[1], points[i].barycentric[2]);
+        }
+      }
+      std::fprintf(stderr, "it %d n %zu mean %.2e med %.2e max %.2e capped %d\n", iteration, n, moved / double(m), d[d.size()/2], mx, capped);
+    }
     if (iteration >= o.resample_every && result.last_displacement < o.tolerance) {
       result.converged = true;
       break;

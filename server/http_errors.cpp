@@ -1,0 +1,52 @@
+#include "server/http_errors.h"
+
+#include <nlohmann/json.hpp>
+
+#include <new>
+
+#include "engine/errors.h"
+
+namespace featureline::server {
+
+std::string ErrorReply::body() const {
+  return nlohmann::json{{"error", {{"code", code}, {"message", message}}}}.dump();
+}
+
+ErrorReply error_reply(std::exception_ptr error) {
+  ErrorReply r;
+  try {
+    std::rethrow_exception(error);
+  } catch (const HttpError& e) {
+    r = {e.status(), e.code(), e.what(), e.headers()};
+  } catch (const UnsupportedFormatError& e) {
+    r = {415, "unsupported_format", e.what(), {}};
+  } catch (const LimitExceededError& e) {
+    r = {413, "payload_too_large", e.what(), {}};
+  } catch (const MeshFormatError& e) {
+    r = {400, "malformed_mesh", e.what(), {}};
+  } catch (const InvalidInputError& e) {
+    r = {400, "invalid_request", e.what(), {}};
+  } catch (const GeometryError& e) {
+    r = {422, "unprocessable_geometry", e.what(), {}};
+  } catch (const nlohmann::json::exception& e) {
+    r = {400, "invalid_json", std::string("the request body is not valid JSON: ") + e.what(), {}};
+  } catch (const std::bad_alloc&) {
+    r = {413, "payload_too_large", "the request needs more memory than the server can give it", {}};
+  } catch (...) {
+    r = {500, "internal", "internal error", {}};
+  }
+  return r;
+}
+
+ErrorReply error_reply_for_status(int status) {
+  switch (status) {
+    case 400: return {400, "invalid_request", "the request could not be parsed", {}};
+    case 404: return {404, "not_found", "no such route", {}};
+    case 405: return {405, "method_not_allowed", "method not allowed on this route", {}};
+    case 413: return {413, "payload_too_large", "the request body is larger than the server accepts", {}};
+    case 414: return {414, "invalid_request", "the request URI is too long", {}};
+    default: return {status, status >= 500 ? "internal" : "invalid_request", "request failed", {}};
+  }
+}
+
+}  // namespace featureline::server

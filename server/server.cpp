@@ -1,0 +1,521 @@
+#include "server/server.h"
+
+// Eigen (through the engine headers) must come before httplib.h: httplib pulls in
+// <resolv.h>, whose `_res` macro breaks Eigen's templates.
+#include "api/feature_line_json.h"
+#include "api/gltf_export.h"
+#include "engine/errors.h"
+#include "engine/feature_line.h"
+#include "engine/mesh_io.h"
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <future>
+#include <iostream>
+#include <mutex>
+
+#include "server/http_errors.h"
+#include "server/metrics.h"
+#include "server/session_cache.h"
+#include "server/work_pool.h"
+
+namespace featureline::server {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using nlohmann::json;
+
+constexpr std::size_t kMaxLinesPerRequest = 64;
+constexpr std::size_t kMaxKeysPerLine = 10000;
+constexpr std::size_t kMaxJsonBytes = 4 << 20;
+
+// The time routing started on this worker thread (set in the pre-routing handler), for the
+// access log and the latency metrics.
+thread_local Clock::time_point request_start;
+thread_local const char* request_route = "unmatched";
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return s;
+}
+
+// The media type without parameters, lower case ("Model/OBJ; charset=x" -> "model/obj").
+std::string media_type(const std::string& header) {
+  std::string type = lower(header.substr(0, header.find(';')));
+  while (!type.empty() && std::isspace((unsigned char)type.back())) type.pop_back();
+  while (!type.empty() && std::isspace((unsigned char)type.front())) type.erase(type.begin());
+  return type;
+}
+
+bool accepts(const httplib::Request& req, const std::string& type) {
+  return lower(req.get_header_value("Accept")).find(type) != std::string::npos;
+}
+
+void write_error(httplib::Response& res, const ErrorReply& error) {
+  res.status = error.status;
+  for (const auto& [k, v] : error.headers) res.set_header(k, v);
+  res.set_content(error.body(), "application/json");
+}
+
+void write_json(httplib::Response& res, int status, const json& body) {
+  res.status = status;
+  res.set_content(body.dump(), "application/json");
+}
+
+}  // namespace
+
+struct FeaturelineServer::Impl {
+  ServerOptions options;
+  httplib::Server http;
+  SessionCache cache;
+  WorkPool pool;
+  Metrics metrics;
+  const Clock::time_point started = Clock::now();
+  std::mutex log_mutex;
+  // Background expiry of idle sessions, so their memory goes even when nobody asks.
+  std::thread sweeper;
+  std::mutex sweeper_mutex;
+  std::condition_variable sweeper_wake;
+  bool sweeper_stop = false;
+
+  explicit Impl(ServerOptions o)
+      : options(std::move(o)),
+        cache(SessionCache::Options{options.cache_mb << 20, std::chrono::seconds(options.ttl_s), [] { return Clock::now(); }}),
+        pool(options.engine_threads, options.queue_capacity) {
+    configure_transport();
+    register_routes();
+    sweeper = std::thread([this] {
+      std::unique_lock<std::mutex> lock(sweeper_mutex);
+      while (!sweeper_wake.wait_for(lock, std::chrono::seconds(5), [this] { return sweeper_stop; })) cache.expire_idle();
+    });
+  }
+
+  ~Impl() {
+    {
+      std::lock_guard<std::mutex> lock(sweeper_mutex);
+      sweeper_stop = true;
+    }
+    sweeper_wake.notify_all();
+    sweeper.join();
+    pool.stop();
+  }
+
+  // ---- transport ----------------------------------------------------------------------
+  void configure_transport() {
+    const std::size_t http_threads = std::max<std::size_t>(2, options.http_threads);
+    // Sized explicitly: the library's default is max(8, cores - 1) with an unbounded queue.
+    http.new_task_queue = [http_threads] { return new httplib::ThreadPool(http_threads); };
+    http.set_read_timeout(options.read_timeout_s, 0);
+    http.set_write_timeout(options.read_timeout_s, 0);
+    http.set_keep_alive_timeout(5);
+    http.set_keep_alive_max_count(1000);
+    // A safety net only: uploads check Content-Length themselves before reading.
+    http.set_payload_max_length((options.max_upload_mb << 20) + 1);
+
+    http.set_pre_routing_handler([](const httplib::Request&, httplib::Response&) {
+      request_start = Clock::now();
+      request_route = "unmatched";
+      return httplib::Server::HandlerResponse::Unhandled;
+    });
+    // Errors the library produces itself (unknown route, oversized body) get our JSON shape.
+    http.set_error_handler([](const httplib::Request&, httplib::Response& res) {
+      if (res.body.empty()) write_error(res, error_reply_for_status(res.status));
+    });
+    // Never let exception text reach a response header (EXCEPTION_WHAT).
+    http.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr error) {
+      write_error(res, error_reply(error));
+    });
+    http.set_post_routing_handler([this](const httplib::Request& req, httplib::Response& res) { add_cors(req, res); });
+    http.set_logger([this](const httplib::Request& req, const httplib::Response& res) {
+      const double seconds = std::chrono::duration<double>(Clock::now() - request_start).count();
+      metrics.record_request(request_route, req.method, res.status, seconds);
+      if (!options.access_log) return;
+      char stamp[32];
+      const std::time_t now = std::time(nullptr);
+      std::tm tm{};
+      gmtime_r(&now, &tm);
+      std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%SZ", &tm);
+      std::lock_guard<std::mutex> lock(log_mutex);
+      std::fprintf(stderr, "%s %s %s %s %d %zu %.2fms\n", stamp, req.remote_addr.c_str(), req.method.c_str(),
+                   req.path.c_str(), res.status, res.body.size(), seconds * 1000);
+    });
+  }
+
+  bool origin_allowed(const std::string& origin) const {
+    for (const auto& allowed : options.cors_origins)
+      if (allowed == "*" || allowed == origin) return true;
+    return false;
+  }
+
+  void add_cors(const httplib::Request& req, httplib::Response& res) const {
+    const std::string origin = req.get_header_value("Origin");
+    if (origin.empty() || !origin_allowed(origin)) return;
+    res.set_header("Access-Control-Allow-Origin", origin);
+    res.set_header("Vary", "Origin");
+    res.set_header("Access-Control-Expose-Headers", "Location, Retry-After");
+  }
+
+  // ---- helpers shared by handlers -------------------------------------------------------
+  template <typename Job>
+  auto run_on_pool(Job job) {
+    auto future = pool.try_submit(std::move(job));
+    if (!future) {
+      metrics.record_rejected("queue_full");
+      throw HttpError(503, "overloaded", "the server is busy; retry shortly", {{"Retry-After", "1"}});
+    }
+    if (future->wait_for(std::chrono::duration<double>(options.deadline_s)) != std::future_status::ready) {
+      metrics.record_rejected("deadline");
+      throw HttpError(503, "deadline_exceeded",
+                      "the request took longer than the server's deadline of " + std::to_string(options.deadline_s) + " s",
+                      {{"Retry-After", "5"}});
+    }
+    return future->get();  // rethrows what the job threw
+  }
+
+  std::shared_ptr<const MeshSession> session_or_404(const std::string& id) {
+    SessionCache::Miss why = SessionCache::Miss::unknown;
+    auto session = cache.find(id, &why);
+    if (session) return session;
+    switch (why) {
+      case SessionCache::Miss::expired:
+        throw HttpError(404, "not_found", "mesh " + id + " expired after " + std::to_string(options.ttl_s) +
+                                              " s without use; upload it again");
+      case SessionCache::Miss::evicted:
+        throw HttpError(404, "not_found", "mesh " + id + " was evicted to make room for newer uploads; upload it again");
+      default: throw HttpError(404, "not_found", "no mesh with id " + id);
+    }
+  }
+
+  json describe(const MeshSession& s) const {
+    json j = mesh_info_to_json(*s.mesh, s.load_ms);
+    j["mesh_id"] = s.id;
+    j["format"] = to_string(s.format);
+    j["expires_in_s"] = cache.expires_in_s(s.id);
+    return j;
+  }
+
+  // Wraps a handler: the route's name for metrics, and every error through error_reply.
+  template <typename Handler>
+  auto guarded(const char* route, Handler handler) {
+    return [route, handler](const httplib::Request& req, httplib::Response& res) {
+      request_route = route;
+      try {
+        handler(req, res);
+      } catch (...) {
+        write_error(res, error_reply(std::current_exception()));
+      }
+    };
+  }
+
+  // ---- routes (the one table) -------------------------------------------------------------
+  void register_routes() {
+    const std::string mesh = "/v1/meshes/([^/]+)";
+    http.Post("/v1/meshes", [this](const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
+      request_route = "/v1/meshes";
+      try {
+        upload(req, res, reader);
+      } catch (...) {
+        write_error(res, error_reply(std::current_exception()));
+      }
+    });
+    http.Get(mesh, guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
+      write_json(res, 200, describe(*session_or_404(req.matches[1])));
+    }));
+    http.Delete(mesh, guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
+      if (!cache.erase(req.matches[1])) session_or_404(req.matches[1]);  // says why it is gone
+      res.status = 204;
+    }));
+    http.Get(mesh + "/mesh\\.glb", guarded("/v1/meshes/{id}/mesh.glb", [this](const auto& req, auto& res) {
+      auto session = session_or_404(req.matches[1]);
+      std::string glb = run_on_pool([session] { return feature_line_to_glb(*session->mesh, {}, true); });
+      res.set_header("Cache-Control", "private, max-age=3600");
+      res.set_content(std::move(glb), "model/gltf-binary");
+    }));
+    http.Get(mesh + "/curvature", guarded("/v1/meshes/{id}/curvature", [this](const auto& req, auto& res) {
+      curvature(req, res);
+    }));
+    http.Post(mesh + "/feature-lines", guarded("/v1/meshes/{id}/feature-lines", [this](const auto& req, auto& res) {
+      feature_lines(req, res);
+    }));
+    http.Get("/healthz", guarded("/healthz", [this](const auto&, auto& res) {
+      write_json(res, 200,
+                 {{"status", "ok"},
+                  {"meshes", cache.stats().entries},
+                  {"uptime_s", std::chrono::duration<double>(Clock::now() - started).count()}});
+    }));
+    http.Get("/metrics", guarded("/metrics", [this](const auto&, auto& res) {
+      const auto s = cache.stats();
+      const std::map<std::string, std::pair<std::string, double>> gauges = {
+          {"featureline_cache_entries", {"Prepared meshes in the session cache.", double(s.entries)}},
+          {"featureline_cache_bytes", {"Bytes held by the session cache.", double(s.bytes)}},
+          {"featureline_cache_budget_bytes", {"Byte budget of the session cache.", double(options.cache_mb << 20)}},
+          {"featureline_cache_evictions_total", {"Sessions evicted to stay within the budget.", double(s.evictions)}},
+          {"featureline_cache_expirations_total", {"Sessions expired after their idle time.", double(s.expirations)}},
+          {"featureline_cache_inserts_total", {"Meshes uploaded and prepared.", double(s.inserts)}},
+          {"featureline_pool_queue_depth", {"Engine jobs waiting for a thread.", double(pool.queue_depth())}},
+          {"featureline_pool_running", {"Engine jobs running.", double(pool.running())}},
+          {"featureline_pool_threads", {"Engine threads.", double(pool.threads())}},
+          {"featureline_pool_queue_capacity", {"Engine jobs that may wait before requests are refused.", double(pool.capacity())}},
+          {"featureline_uptime_seconds", {"Seconds since the server started.",
+                                          std::chrono::duration<double>(Clock::now() - started).count()}},
+      };
+      res.set_content(metrics.render(gauges), "text/plain; version=0.0.4");
+    }));
+    http.Options(".*", guarded("OPTIONS", [this](const auto& req, auto& res) {
+      // CORS preflight: allowed origins get the methods and headers they may use.
+      res.status = 204;
+      if (origin_allowed(req.get_header_value("Origin"))) {
+        res.set_header("Access-Control-Allow-Methods", "GET, POST, DELETE, OPTIONS");
+        res.set_header("Access-Control-Allow-Headers", "Content-Type, Accept");
+        res.set_header("Access-Control-Max-Age", "600");
+      }
+    }));
+    if (!options.web_root.empty() && !http.set_mount_point("/", options.web_root))
+      throw std::runtime_error("cannot serve the web page folder " + options.web_root);
+  }
+
+  // ---- handlers ----------------------------------------------------------------------------
+  void upload(const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
+    // Refuse before reading the body; the connection is then closed, so unread body bytes
+    // can never be parsed as a next request.
+    auto refuse = [&](int status, const char* code, const std::string& message) {
+      res.set_header("Connection", "close");
+      metrics.record_rejected(code);
+      throw HttpError(status, code, message);
+    };
+    const std::size_t max_bytes = options.max_upload_mb << 20;
+    if (req.has_header("Transfer-Encoding"))
+      refuse(411, "length_required", "chunked uploads are not accepted: send the mesh with a Content-Length");
+    const std::string encoding = lower(req.get_header_value("Content-Encoding"));
+    if (!encoding.empty() && encoding != "identity")
+      refuse(415, "unsupported_format", "compressed uploads (Content-Encoding: " + encoding + ") are not accepted");
+    if (!req.has_header("Content-Length")) refuse(411, "length_required", "the upload needs a Content-Length header");
+    const std::string length_text = req.get_header_value("Content-Length");
+    if (length_text.empty() || length_text.size() > 15 || length_text.find_first_not_of("0123456789") != std::string::npos)
+      refuse(400, "invalid_request", "Content-Length is not a number");
+    const std::size_t length = std::stoull(length_text);
+    if (length == 0) refuse(400, "malformed_mesh", "the upload is empty");
+    if (length > max_bytes)
+      refuse(413, "payload_too_large", "the upload is " + std::to_string(length) + " bytes; this server accepts at most " +
+                                           std::to_string(options.max_upload_mb) + " MiB");
+    std::optional<MeshFormat> format;
+    if (req.has_param("format")) {
+      format = parse_mesh_format(req.get_param_value("format"));
+      if (!format) refuse(415, "unsupported_format", "unknown format \"" + req.get_param_value("format") +
+                                                         "\"; use obj, off, ply, stl, glb, gltf or drc");
+    } else if (req.has_header("Content-Type")) {
+      const std::string type = media_type(req.get_header_value("Content-Type"));
+      static const std::map<std::string, MeshFormat> by_type = {
+          {"model/obj", MeshFormat::obj},        {"model/stl", MeshFormat::stl},
+          {"model/x-off", MeshFormat::off},      {"application/x-ply", MeshFormat::ply},
+          {"model/gltf-binary", MeshFormat::glb}, {"model/gltf+json", MeshFormat::gltf},
+          {"application/x-draco", MeshFormat::drc}};
+      if (auto it = by_type.find(type); it != by_type.end()) format = it->second;
+      else if (type == "application/x-www-form-urlencoded")
+        refuse(415, "unsupported_format",
+               "the body was sent as a form (curl -d does that); send it as application/octet-stream or a model/* type, "
+               "e.g. curl --data-binary @mesh.obj -H 'Content-Type: application/octet-stream'");
+      else if (type != "application/octet-stream" && !type.empty())
+        refuse(415, "unsupported_format", "unsupported Content-Type \"" + type + "\"");
+    }
+
+    std::string body;
+    body.reserve(length);
+    const bool complete = reader([&](const char* data, std::size_t size) {
+      if (body.size() + size > length) return false;
+      body.append(data, size);
+      return true;
+    });
+    if (!complete || body.size() != length) {
+      res.set_header("Connection", "close");
+      throw HttpError(400, "malformed_mesh", "the upload ended after " + std::to_string(body.size()) + " of " +
+                                                 std::to_string(length) + " bytes");
+    }
+    if (!format) format = sniff_mesh_format(body);
+    if (!format)
+      throw HttpError(415, "unsupported_format",
+                      "could not tell the mesh format from its bytes; pass ?format=obj|off|ply|stl|glb|gltf|drc");
+
+    const MeshFormat fmt = *format;
+    MeshSession session = run_on_pool([body = std::move(body), fmt]() {
+      const auto t0 = Clock::now();
+      RawMesh raw = read_mesh(body, fmt);
+      MeshSession s;
+      s.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      s.format = fmt;
+      s.mesh = prepare_mesh(std::move(raw));
+      s.bytes = s.mesh->memory_bytes();
+      return s;
+    });
+    const std::size_t needed = session.bytes;
+    auto stored = cache.insert(std::move(session));
+    if (!stored)
+      throw HttpError(413, "payload_too_large",
+                      "the prepared mesh needs " + std::to_string(needed >> 20) + " MiB, more than the cache's whole budget of " +
+                          std::to_string(options.cache_mb) + " MiB");
+    res.set_header("Location", "/v1/meshes/" + (*stored)->id);
+    write_json(res, 201, describe(**stored));
+  }
+
+  void curvature(const httplib::Request& req, httplib::Response& res) {
+    auto session = session_or_404(req.matches[1]);
+    const auto& h = session->mesh->mean_curvature;
+    if (accepts(req, "application/octet-stream")) {
+      static_assert(sizeof(float) == 4, "float32 output");
+      std::string bytes(h.size() * 4, '\0');
+      for (std::size_t i = 0; i < h.size(); ++i) {
+        const float f = float(h[i]);
+        std::uint32_t bits;
+        std::memcpy(&bits, &f, 4);
+        for (int b = 0; b < 4; ++b) bytes[4 * i + b] = char((bits >> (8 * b)) & 0xFF);  // little-endian
+      }
+      res.set_content(std::move(bytes), "application/octet-stream");
+      return;
+    }
+    write_json(res, 200, {{"vertices", h.size()}, {"curvature", h}});
+  }
+
+  static std::uint32_t nearest_vertex(const PreparedMesh& mesh, const Eigen::Vector3d& p) {
+    std::uint32_t best = 0;
+    double best_d = HUGE_VAL;
+    for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
+      if (mesh.component[v] < 0) continue;
+      const double d = (mesh.positions[v] - p).squaredNorm();
+      if (d < best_d) best_d = d, best = v;
+    }
+    return best;
+  }
+
+  FeatureLineRequest parse_line(const json& j, const PreparedMesh& mesh, const std::string& where) {
+    if (!j.is_object()) throw InvalidInputError(where + " must be a JSON object");
+    for (auto it = j.begin(); it != j.end(); ++it)
+      if (it.key() != "keys" && it.key() != "closed" && it.key() != "options")
+        throw InvalidInputError("unknown field \"" + where + "." + it.key() + "\"");
+    FeatureLineRequest line;
+    const auto keys = j.find("keys");
+    if (keys == j.end() || !keys->is_array()) throw InvalidInputError(where + ".keys must be an array of vertex ids or points");
+    if (keys->size() > kMaxKeysPerLine) throw InvalidInputError(where + ".keys has more than 10000 keys");
+    for (std::size_t i = 0; i < keys->size(); ++i) {
+      const json& k = (*keys)[i];
+      const std::string at = where + ".keys[" + std::to_string(i) + "]";
+      if (k.is_number_unsigned()) {
+        const auto id = k.get<std::uint64_t>();
+        if (id >= mesh.n_vertices())
+          throw InvalidInputError(at + " is vertex " + std::to_string(id) + ", but the mesh has only " +
+                                  std::to_string(mesh.n_vertices()) + " vertices");
+        line.keys.push_back(std::uint32_t(id));
+      } else if (k.is_object() && k.size() == 1 && k.contains("point") && k["point"].is_array() && k["point"].size() == 3 &&
+                 k["point"][0].is_number() && k["point"][1].is_number() && k["point"][2].is_number()) {
+        const Eigen::Vector3d p(k["point"][0].get<double>(), k["point"][1].get<double>(), k["point"][2].get<double>());
+        if (!p.allFinite()) throw InvalidInputError(at + ".point must be finite");
+        line.keys.push_back(nearest_vertex(mesh, p));
+      } else {
+        throw InvalidInputError(at + " must be a vertex id (integer >= 0) or {\"point\": [x, y, z]}");
+      }
+    }
+    if (const auto closed = j.find("closed"); closed != j.end()) {
+      if (!closed->is_boolean()) throw InvalidInputError(where + ".closed must be true or false");
+      line.closed = closed->get<bool>();
+    }
+    if (const auto opts = j.find("options"); opts != j.end()) apply_options_json(*opts, line.options);
+    return line;
+  }
+
+  void feature_lines(const httplib::Request& req, httplib::Response& res) {
+    auto session = session_or_404(req.matches[1]);
+    // Answer format: ?format= wins over Accept.
+    std::string answer = "json";
+    if (req.has_param("format")) {
+      answer = req.get_param_value("format");
+      if (answer != "json" && answer != "glb" && answer != "gltf")
+        throw HttpError(400, "invalid_request", "format must be json, glb or gltf");
+    } else if (accepts(req, "model/gltf-binary")) {
+      answer = "glb";
+    } else if (accepts(req, "model/gltf+json")) {
+      answer = "gltf";
+    }
+    if (req.body.size() > kMaxJsonBytes) throw HttpError(413, "payload_too_large", "the request body exceeds 4 MiB");
+    const json body = json::parse(req.body);
+    if (!body.is_object()) throw InvalidInputError("the request body must be a JSON object");
+    std::vector<FeatureLineRequest> lines;
+    const bool batch = body.contains("lines");
+    if (batch) {
+      if (body.size() != 1) throw InvalidInputError("with \"lines\", no other top-level field is allowed");
+      const json& list = body["lines"];
+      if (!list.is_array() || list.empty() || list.size() > kMaxLinesPerRequest)
+        throw InvalidInputError("\"lines\" must be an array of 1 to 64 line requests");
+      for (std::size_t i = 0; i < list.size(); ++i) lines.push_back(parse_line(list[i], *session->mesh, "lines[" + std::to_string(i) + "]"));
+    } else {
+      lines.push_back(parse_line(body, *session->mesh, "request"));
+    }
+    // Lines run in parallel on the pool; each job shares the immutable mesh.
+    std::vector<std::future<FeatureLineResult>> futures;
+    for (auto& line : lines) {
+      auto future = pool.try_submit([session, line] { return detect_feature_line(*session->mesh, line); });
+      if (!future) {
+        metrics.record_rejected("queue_full");
+        throw HttpError(503, "overloaded", "the server is busy; retry shortly", {{"Retry-After", "1"}});
+      }
+      futures.push_back(std::move(*future));
+    }
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.deadline_s));
+    std::vector<FeatureLineResult> results;
+    for (auto& f : futures) {
+      if (f.wait_until(deadline) != std::future_status::ready) {
+        metrics.record_rejected("deadline");
+        throw HttpError(503, "deadline_exceeded", "the request took longer than the server's deadline", {{"Retry-After", "5"}});
+      }
+      results.push_back(f.get());
+    }
+    if (answer == "glb") {
+      res.set_content(feature_line_to_glb(*session->mesh, results, false), "model/gltf-binary");
+    } else if (answer == "gltf") {
+      res.set_content(feature_line_to_gltf_json(*session->mesh, results, false), "model/gltf+json");
+    } else if (batch) {
+      json out = json::array();
+      for (const auto& r : results) out.push_back(feature_line_to_json(r));
+      write_json(res, 200, {{"lines", out}});
+    } else {
+      write_json(res, 200, feature_line_to_json(results[0]));
+    }
+  }
+};
+
+FeaturelineServer::FeaturelineServer(ServerOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
+FeaturelineServer::~FeaturelineServer() = default;
+
+int FeaturelineServer::bind() {
+  const auto& o = impl_->options;
+  int port = o.port;
+  if (port == 0) port = impl_->http.bind_to_any_port(o.host);
+  else if (!impl_->http.bind_to_port(o.host, port)) port = -1;
+  if (port <= 0) throw std::runtime_error("cannot listen on " + o.host + ":" + std::to_string(o.port));
+  return port;
+}
+
+bool FeaturelineServer::run() { return impl_->http.listen_after_bind(); }
+
+void FeaturelineServer::stop() { impl_->http.stop(); }
+
+std::string FeaturelineServer::preload(const std::string& path) {
+  const auto t0 = Clock::now();
+  RawMesh raw = read_mesh_file(path);
+  MeshSession s;
+  s.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  s.format = raw.format;
+  s.mesh = prepare_mesh(std::move(raw));
+  s.bytes = s.mesh->memory_bytes();
+  auto stored = impl_->cache.insert(std::move(s));
+  if (!stored) throw std::runtime_error(path + " is larger than the whole cache budget");
+  return (*stored)->id;
+}
+
+}  // namespace featureline::server
