@@ -1,0 +1,137 @@
+// Load benchmark of featureline-server on loopback: lines per second and p50/p99 latency of
+// 3-key feature lines on the 70k-triangle bunny at 1, 8 and 32 connections, and the
+// upload-to-ready time of igea (270k triangles). The server runs in this process on its own
+// threads (as it would beside a load generator on the same 2-core machine); every client
+// thread keeps one keep-alive connection.
+//
+// usage: bench_server [--seconds S] [--threads N]
+#include "api/feature_line_json.h"
+#include "bench/feature_keys.h"
+#include "engine/mesh_io.h"
+#include "server/server.h"
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("missing benchmark mesh " + path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5))];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  double seconds = 5;
+  std::size_t engine_threads = std::max(1u, std::thread::hardware_concurrency());
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (std::string(argv[i]) == "--seconds") seconds = std::atof(argv[i + 1]);
+    if (std::string(argv[i]) == "--threads") engine_threads = std::size_t(std::atoi(argv[i + 1]));
+  }
+  const std::string meshes = std::string(FEATURELINE_SHARED_DIR) + "/data/meshes/";
+  try {
+    featureline::server::ServerOptions options;
+    options.port = 0;
+    options.engine_threads = engine_threads;
+    options.access_log = false;
+    options.cache_mb = 4096;
+    featureline::server::FeaturelineServer server(options);
+    const int port = server.bind();
+    std::thread serving([&] { server.run(); });
+
+    // Upload-to-ready of igea: the whole POST (transfer, parse, prepare), median of 3.
+    const std::string igea = read_file(meshes + "igea.ply");
+    std::vector<double> upload_ms;
+    for (int i = 0; i < 3; ++i) {
+      httplib::Client client("127.0.0.1", port);
+      client.set_read_timeout(60, 0);
+      const auto t0 = Clock::now();
+      auto res = client.Post("/v1/meshes", igea, "application/x-ply");
+      upload_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+      if (!res || res->status != 201) throw std::runtime_error("igea upload failed");
+      client.Delete(("/v1/meshes/" + nlohmann::json::parse(res->body)["mesh_id"].get<std::string>()).c_str());
+    }
+    std::printf("upload-to-ready igea.ply (268,686 triangles, %zu bytes): median %.0f ms of 3\n\n", igea.size(),
+                percentile(upload_ms, 0.5));
+
+    // Lines on the bunny: keys picked along features, the same set for every concurrency.
+    const std::string bunny = read_file(meshes + "bunny_closed.off");
+    httplib::Client setup("127.0.0.1", port);
+    auto res = setup.Post("/v1/meshes?format=off", bunny, "application/octet-stream");
+    if (!res || res->status != 201) throw std::runtime_error("bunny upload failed");
+    const std::string id = nlohmann::json::parse(res->body)["mesh_id"];
+    const auto mesh = featureline::prepare_mesh(featureline::read_mesh(bunny, featureline::MeshFormat::off));
+    std::mt19937_64 rng(7);
+    std::vector<std::string> bodies;
+    while (bodies.size() < 64) {
+      const auto keys = featureline::pick_feature_keys(*mesh, rng);
+      if (!keys.empty()) bodies.push_back(nlohmann::json{{"keys", keys}}.dump());
+    }
+    std::printf("3-key lines on bunny_closed.off (69,666 triangles), %zu engine threads, %.0f s per level:\n",
+                engine_threads, seconds);
+    std::printf("%12s %10s %10s %10s %10s %8s\n", "connections", "lines/s", "p50_ms", "p99_ms", "max_ms", "errors");
+    for (int connections : {1, 8, 32}) {
+      std::vector<std::vector<double>> latencies{std::size_t(connections)};
+      std::atomic<std::size_t> errors{0};
+      std::atomic<int> connected{0};
+      Clock::time_point end{};
+      std::atomic<bool> go{false};
+      std::vector<std::thread> clients;
+      for (int c = 0; c < connections; ++c)
+        clients.emplace_back([&, c] {
+          httplib::Client client("127.0.0.1", port);
+          client.set_keep_alive(true);
+          client.set_tcp_nodelay(true);
+          std::size_t i = std::size_t(c);
+          const std::string path = "/v1/meshes/" + id + "/feature-lines";
+          // Warm-up: connect and send one request before the timed window. The library's
+          // listen backlog is 5, so a burst of new connections can wait for a SYN retry (1 s);
+          // that is connection setup, not steady-state latency.
+          client.Post(path.c_str(), bodies[i % bodies.size()], "application/json");
+          ++connected;
+          while (!go) std::this_thread::yield();
+          while (Clock::now() < end) {
+            const auto t0 = Clock::now();
+            auto r = client.Post(path.c_str(), bodies[i++ % bodies.size()], "application/json");
+            const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+            if (!r || r->status != 200) ++errors;
+            else latencies[std::size_t(c)].push_back(ms);
+          }
+        });
+      while (connected < connections) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+      go = true;
+      for (auto& t : clients) t.join();
+      std::vector<double> all;
+      for (const auto& l : latencies) all.insert(all.end(), l.begin(), l.end());
+      std::printf("%12d %10.0f %10.2f %10.2f %10.2f %8zu\n", connections, double(all.size()) / seconds,
+                  percentile(all, 0.5), percentile(all, 0.99), percentile(all, 1.0), errors.load());
+    }
+    server.stop();
+    serving.join();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_server: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
