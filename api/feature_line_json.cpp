@@ -29,8 +29,11 @@ class FieldReader {
   }
   void integer(const char* name, int& out, int lo, int hi) {
     if (const json* v = take(name)) {
-      if (!v->is_number_integer()) throw InvalidInputError(where(name) + " must be an integer");
-      const auto x = v->get<long long>();
+      // JSON Schema counts 2.0 as an integer, so do we.
+      if (!v->is_number() || !std::isfinite(v->get<double>()) || v->get<double>() != std::floor(v->get<double>()))
+        throw InvalidInputError(where(name) + " must be an integer");
+      if (std::abs(v->get<double>()) > 1e9) throw InvalidInputError(where(name) + " must be between " + fmt(lo) + " and " + fmt(hi));
+      const auto x = static_cast<long long>(v->get<double>());
       if (x < lo || x > hi) throw InvalidInputError(where(name) + " must be between " + fmt(lo) + " and " + fmt(hi));
       out = int(x);
     }

@@ -70,6 +70,51 @@ bool walk(const FeatureStrip& strip, const FlatStrip& flat, std::uint32_t start,
   return false;
 }
 
+// Moves `point` along the straight segment to `target`, across strip triangles, stopping where
+// the segment leaves the valid strip (its border or a folded triangle). Unlike walk(), a point
+// stopped by the border keeps its position along the segment instead of sliding to the border
+// point nearest the target, so a point pushed outwards iteration after iteration stays put.
+void move_along_segment(const FeatureStrip& strip, const FlatStrip& flat, StripPoint& point, const Eigen::Vector2d& target) {
+  std::uint32_t t = point.triangle;
+  Eigen::Vector2d q = point.uv;
+  const std::size_t guard = 4 * strip.triangles.size() + 16;
+  for (std::size_t step = 0; step < guard; ++step) {
+    const auto& tri = strip.triangles[t];
+    const Eigen::Vector2d& a = flat.uv[tri[0]];
+    const Eigen::Vector2d& b = flat.uv[tri[1]];
+    const Eigen::Vector2d& c = flat.uv[tri[2]];
+    const Eigen::Vector3d at_target = barycentric_of(target, a, b, c);
+    if (at_target.minCoeff() >= -1e-12) {
+      point.triangle = t;
+      point.barycentric = at_target.cwiseMax(0.0) / at_target.cwiseMax(0.0).sum();
+      point.uv = target;
+      return;
+    }
+    // The edge through which the segment q -> target leaves this triangle.
+    const Eigen::Vector3d at_q = barycentric_of(q, a, b, c).cwiseMax(0.0);
+    int exit = -1;
+    double exit_s = HUGE_VAL;
+    for (int k = 0; k < 3; ++k) {
+      if (at_target[k] >= 0) continue;
+      const double s = at_q[k] / (at_q[k] - at_target[k]);
+      if (s < exit_s) exit_s = s, exit = k;
+    }
+    const Eigen::Vector3d at_exit = (at_q + exit_s * (at_target - at_q)).cwiseMax(0.0);
+    const Eigen::Vector3d bary = at_exit / at_exit.sum();
+    q = bary[0] * a + bary[1] * b + bary[2] * c;
+    const std::int32_t next = strip.triangle_neighbors[t][exit];
+    if (next >= 0 && flat.triangle_valid[std::size_t(next)]) {
+      t = std::uint32_t(next);
+      continue;
+    }
+    point.triangle = t;
+    point.barycentric = bary;
+    point.uv = q;
+    return;
+  }
+  // A folded layout made the walk cycle: leave the point where it was.
+}
+
 // (I + tau A) restricted to the interior points, A = alpha D1^T D1 + beta D2^T D2 built from the
 // energy sum alpha |v_{i+1} - v_i|^2 + beta |v_{i-1} - 2 v_i + v_{i+1}|^2 (Eqs. 5, 6, 12). Building A
 // from the energy gives the right rows next to the pinned ends: a truncated fourth difference
@@ -212,6 +257,19 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
       if (weight[v] > 0) vertex_gradient[v] /= weight[v];
     zero_gradient_across_sharp_crests(strip, flat, potential, o.sharp_crest_drop, vertex_gradient);
   }
+  // Jacobian of the smooth force, constant per triangle: F = sum_k lambda_k g_k.
+  std::vector<Eigen::Matrix2d> force_jacobian(nt, Eigen::Matrix2d::Zero());
+  if (o.force == SnakeForce::smooth)
+    for (std::size_t t = 0; t < nt; ++t) {
+      if (!flat.triangle_valid[t]) continue;
+      const auto& tri = strip.triangles[t];
+      const Eigen::Vector2d p[3] = {flat.uv[tri[0]] / unit, flat.uv[tri[1]] / unit, flat.uv[tri[2]] / unit};
+      const double twice_area = cross2(p[1] - p[0], p[2] - p[0]);
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector2d e = p[(k + 2) % 3] - p[(k + 1) % 3];
+        force_jacobian[t] += vertex_gradient[tri[k]] * (Eigen::Vector2d(-e.y(), e.x()) / twice_area).transpose();
+      }
+    }
   auto force_at = [&](const StripPoint& p) -> Eigen::Vector2d {
     if (o.force == SnakeForce::paper) return triangle_gradient[p.triangle];
     const auto& tri = strip.triangles[p.triangle];
@@ -261,129 +319,212 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
   }
   points.push_back(point_at_vertex(strip.line.back()));
 
+  // Resampling: points closer than h/2 are deleted, gaps over 3h/2 get evenly spaced new points.
+  // Returns whether the point set changed.
   auto resample = [&]() {
     std::vector<StripPoint> next;
     next.reserve(points.size() + 8);
     next.push_back(points.front());
+    bool changed = false;
     for (std::size_t i = 1; i < points.size(); ++i) {
       const bool last = i + 1 == points.size();
       const double gap = (points[i].uv - next.back().uv).norm();
-      if (!last && gap < 0.5 * h) continue;  // too close: delete
-      if (gap > 1.5 * h) {                     // too far: insert evenly
+      if (!last && gap < 0.5 * h) {  // too close: delete
+        changed = true;
+        continue;
+      }
+      if (gap > 1.5 * h) {  // too far: insert evenly
         const int pieces = int(std::ceil(gap / h));
         const StripPoint from = next.back();
         for (int k = 1; k < pieces; ++k) {
           StripPoint p = from;
           walk(strip, flat, from.triangle, from.uv + (points[i].uv - from.uv) * (double(k) / pieces), p);
           next.push_back(p);
+          changed = true;
         }
       }
       next.push_back(points[i]);
     }
     // the last kept interior point may now sit too close to the pinned end
-    if (next.size() > 2 && (next.back().uv - next[next.size() - 2].uv).norm() < 0.5 * h) next.erase(next.end() - 2);
+    if (next.size() > 2 && (next.back().uv - next[next.size() - 2].uv).norm() < 0.5 * h) {
+      next.erase(next.end() - 2);
+      changed = true;
+    }
     points.swap(next);
+    if (std::getenv("SNAKE_RESPACE") && points.size() > 2) {
+      // Even spacing along the polyline (a tangential move: the line's shape is kept).
+      std::vector<double> arc(points.size(), 0.0);
+      for (std::size_t i = 1; i < points.size(); ++i) arc[i] = arc[i - 1] + (points[i].uv - points[i - 1].uv).norm();
+      const double total = arc.back();
+      std::vector<StripPoint> spaced(points);
+      std::size_t seg = 0;
+      for (std::size_t k = 1; k + 1 < points.size(); ++k) {
+        const double sk = total * double(k) / double(points.size() - 1);
+        while (seg + 2 < points.size() && arc[seg + 1] < sk) ++seg;
+        const double len = arc[seg + 1] - arc[seg];
+        const double f = len > 0 ? std::clamp((sk - arc[seg]) / len, 0.0, 1.0) : 0.0;
+        const Eigen::Vector2d q = points[seg].uv + f * (points[seg + 1].uv - points[seg].uv);
+        StripPoint p = f < 0.5 ? points[seg] : points[seg + 1];
+        move_along_segment(strip, flat, p, q);
+        spaced[k] = p;
+      }
+      points.swap(spaced);
+    }
+    return changed;
   };
 
+  const bool normal_step = std::getenv("SNAKE_OLD") == nullptr;
+  const double tau = std::getenv("SNAKE_TAU") ? std::atof(std::getenv("SNAKE_TAU")) : o.tau;
+  const bool linearize = std::getenv("SNAKE_NOLIN") == nullptr;
+
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> solver;
-  Eigen::SparseMatrix<double> A;
+  Eigen::SparseMatrix<double> A, M;
   std::size_t factored_size = 0;
-  Eigen::VectorXd x, y, rhs_x, rhs_y;
-  std::vector<Eigen::Vector2d> prev_disp;
+  Eigen::VectorXd x, y, rhs_x, rhs_y, rhs;
+  std::vector<Eigen::Vector2d> normal, window_start_uv;
+  int window_start = 0;
+  const int window = 2 * o.resample_every;
   for (int iteration = 0; iteration < o.max_iterations; ++iteration) {
-    if (iteration % o.resample_every == 0) resample();
+    if (std::getenv("SNAKE_DUMP2") && iteration >= std::atoi(std::getenv("SNAKE_DUMP2")) && iteration < std::atoi(std::getenv("SNAKE_DUMP2")) + 11 && iteration % o.resample_every == 0) {
+      std::fprintf(stderr, "before resample it %d:\n", iteration);
+      for (std::size_t i = 0; i < points.size(); ++i) std::fprintf(stderr, "  p%2zu uv %8.3f %8.3f gap %.3f\n", i, points[i].uv.x()/unit, points[i].uv.y()/unit, i ? (points[i].uv - points[i-1].uv).norm()/unit : 0.0);
+    }
+    if (iteration % o.resample_every == 0 && (resample() || iteration == 0) && (std::getenv("SNAKE_PERPOINT") || iteration == 0)) {
+      window_start = iteration;
+      window_start_uv.clear();
+      for (const auto& p : points) window_start_uv.push_back(p.uv);
+    }
     const std::size_t n = points.size();
     if (n <= 2) {
       result.converged = true;
       break;
     }
     const std::size_t m = n - 2;  // interior unknowns
-    if (n != factored_size) {
-      A = stiffness(n, o.alpha, o.beta);
-      Eigen::SparseMatrix<double> M = A.block(1, 1, Eigen::Index(m), Eigen::Index(m)) * o.tau;
-      for (Eigen::Index i = 0; i < Eigen::Index(m); ++i) M.coeffRef(i, i) += 1.0;
-      solver.compute(M);
-      if (solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
-      factored_size = n;
-    }
     x.resize(Eigen::Index(n));
     y.resize(Eigen::Index(n));
     for (std::size_t i = 0; i < n; ++i) x[Eigen::Index(i)] = points[i].uv.x() / unit, y[Eigen::Index(i)] = points[i].uv.y() / unit;
-    // Pinned ends enter the right-hand side through A's coupling columns.
-    Eigen::VectorXd ends_x = Eigen::VectorXd::Zero(Eigen::Index(n)), ends_y = Eigen::VectorXd::Zero(Eigen::Index(n));
-    ends_x[0] = x[0], ends_x[Eigen::Index(n - 1)] = x[Eigen::Index(n - 1)];
-    ends_y[0] = y[0], ends_y[Eigen::Index(n - 1)] = y[Eigen::Index(n - 1)];
-    const Eigen::VectorXd coupling_x = A * ends_x, coupling_y = A * ends_y;
-    rhs_x.resize(Eigen::Index(m));
-    rhs_y.resize(Eigen::Index(m));
-    for (std::size_t i = 1; i + 1 < n; ++i) {
-      // Eq. (15): (I + tau A) v_{k+1} = v_k + tau kappa grad |C|^p, the force step capped so a
-      // point never jumps across a crest in one iteration.
-      Eigen::Vector2d step = o.tau * o.kappa * force_at(points[i]);
-      if (o.normal_force_only) {
-        const Eigen::Vector2d chord = points[i + 1].uv - points[i - 1].uv;
-        const double chord_len = chord.norm();
-        if (chord_len > 0) step -= step.dot(chord / chord_len) * (chord / chord_len);
-      }
-      const double len = step.norm();
-      if (len > o.max_step) step *= o.max_step / len;
-      const auto r = Eigen::Index(i - 1);
-      rhs_x[r] = x[Eigen::Index(i)] + step.x() - o.tau * coupling_x[Eigen::Index(i)];
-      rhs_y[r] = y[Eigen::Index(i)] + step.y() - o.tau * coupling_y[Eigen::Index(i)];
-    }
-    const Eigen::VectorXd new_x = solver.solve(rhs_x), new_y = solver.solve(rhs_y);
-    double moved = 0;
-    for (std::size_t i = 1; i + 1 < n; ++i) {
-      Eigen::Vector2d target(new_x[Eigen::Index(i - 1)] * unit, new_y[Eigen::Index(i - 1)] * unit);
-      if (!target.allFinite()) continue;
-      if (std::getenv("SNAKE_NORMAL")) {
+    if (n != factored_size) A = stiffness(n, o.alpha, o.beta);
+    std::vector<Eigen::Vector2d> targets(n);
+    if (normal_step) {
+      // Implicit step restricted to motion along each point's normal:
+      // (I + tau N'AN + tau K) s = tau N'(kappa F - A v), K the force's restoring stiffness.
+      normal.assign(n, Eigen::Vector2d::Zero());
+      for (std::size_t i = 1; i + 1 < n; ++i) {
         const Eigen::Vector2d chord(x[Eigen::Index(i + 1)] - x[Eigen::Index(i - 1)], y[Eigen::Index(i + 1)] - y[Eigen::Index(i - 1)]);
-        if (chord.norm() > 0) { const Eigen::Vector2d t = chord.normalized(); const Eigen::Vector2d d = target - points[i].uv; target = points[i].uv + d - d.dot(t) * t; }
+        if (chord.norm() > 0) normal[i] = Eigen::Vector2d(-chord.y(), chord.x()) / chord.norm();
       }
-      const Eigen::Vector2d before = points[i].uv;
-      walk(strip, flat, points[i].triangle, target, points[i]);
-      moved += (points[i].uv - before).norm() / unit;
+      const Eigen::VectorXd ax = A * x, ay = A * y;
+      std::vector<Eigen::Triplet<double>> triplets;
+      triplets.reserve(5 * m);
+      rhs.resize(Eigen::Index(m));
+      for (std::size_t i = 1; i + 1 < n; ++i) {
+        const Eigen::Vector2d f = o.kappa * force_at(points[i]) - Eigen::Vector2d(ax[Eigen::Index(i)], ay[Eigen::Index(i)]);
+        rhs[Eigen::Index(i - 1)] = tau * normal[i].dot(f);
+        double stiff = 0;
+        if (linearize && o.force == SnakeForce::smooth) stiff = std::max(0.0, -o.kappa * normal[i].dot(force_jacobian[points[i].triangle] * normal[i]));
+        triplets.emplace_back(i - 1, i - 1, 1.0 + tau * stiff);
+      }
+      for (int k = 0; k < A.outerSize(); ++k)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(A, k); it; ++it) {
+          const auto r = std::size_t(it.row()), c = std::size_t(it.col());
+          if (r == 0 || c == 0 || r + 1 == n || c + 1 == n || r < c) continue;
+          triplets.emplace_back(r - 1, c - 1, tau * it.value() * normal[r].dot(normal[c]));
+        }
+      M.resize(Eigen::Index(m), Eigen::Index(m));
+      M.setFromTriplets(triplets.begin(), triplets.end());
+      if (n != factored_size) solver.analyzePattern(M);
+      solver.factorize(M);
+      if (solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
+      factored_size = n;
+      const Eigen::VectorXd step = solver.solve(rhs);
+      for (std::size_t i = 1; i + 1 < n; ++i) {
+        const double si = std::clamp(step[Eigen::Index(i - 1)], -o.max_step, o.max_step);
+        targets[i] = (Eigen::Vector2d(x[Eigen::Index(i)], y[Eigen::Index(i)]) + si * normal[i]) * unit;
+      }
+    } else {
+      if (n != factored_size) {
+        Eigen::SparseMatrix<double> Mi = A.block(1, 1, Eigen::Index(m), Eigen::Index(m)) * tau;
+        for (Eigen::Index i = 0; i < Eigen::Index(m); ++i) Mi.coeffRef(i, i) += 1.0;
+        solver.compute(Mi);
+        if (solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
+        factored_size = n;
+      }
+      Eigen::VectorXd ends_x = Eigen::VectorXd::Zero(Eigen::Index(n)), ends_y = Eigen::VectorXd::Zero(Eigen::Index(n));
+      ends_x[0] = x[0], ends_x[Eigen::Index(n - 1)] = x[Eigen::Index(n - 1)];
+      ends_y[0] = y[0], ends_y[Eigen::Index(n - 1)] = y[Eigen::Index(n - 1)];
+      const Eigen::VectorXd coupling_x = A * ends_x, coupling_y = A * ends_y;
+      rhs_x.resize(Eigen::Index(m));
+      rhs_y.resize(Eigen::Index(m));
+      for (std::size_t i = 1; i + 1 < n; ++i) {
+        Eigen::Vector2d step = tau * o.kappa * force_at(points[i]);
+        if (o.normal_force_only) {
+          const Eigen::Vector2d chord = points[i + 1].uv - points[i - 1].uv;
+          const double chord_len = chord.norm();
+          if (chord_len > 0) step -= step.dot(chord / chord_len) * (chord / chord_len);
+        }
+        const double len = step.norm();
+        if (len > o.max_step) step *= o.max_step / len;
+        const auto r = Eigen::Index(i - 1);
+        rhs_x[r] = x[Eigen::Index(i)] + step.x() - tau * coupling_x[Eigen::Index(i)];
+        rhs_y[r] = y[Eigen::Index(i)] + step.y() - tau * coupling_y[Eigen::Index(i)];
+      }
+      const Eigen::VectorXd new_x = solver.solve(rhs_x), new_y = solver.solve(rhs_y);
+      for (std::size_t i = 1; i + 1 < n; ++i)
+        targets[i] = Eigen::Vector2d(new_x[Eigen::Index(i - 1)], new_y[Eigen::Index(i - 1)]) * unit;
+    }
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+      const Eigen::Vector2d before = points[i].uv; const auto tb = points[i].triangle;
+      if (targets[i].allFinite()) {
+        if (std::getenv("SNAKE_OLDWALK")) walk(strip, flat, points[i].triangle, targets[i], points[i]);
+        else move_along_segment(strip, flat, points[i], targets[i]);
+      }
+      if (std::getenv("SNAKE_PT") && int(i) == std::atoi(std::getenv("SNAKE_PT")) && iteration > 200)
+        std::fprintf(stderr, "   it %d pt %zu tri %u->%u move %+.3e target-miss %.2e Fn %+.4f stiff %.3f\n", iteration, i, tb, points[i].triangle, normal_step ? cross2(Eigen::Vector2d(-normal[i].y(), normal[i].x()), points[i].uv - before)/unit : 0.0,
+          (targets[i] - points[i].uv).norm()/unit, o.kappa * normal[i].dot(force_at(points[i])), -o.kappa * normal[i].dot(force_jacobian[points[i].triangle] * normal[i]));
     }
     result.iterations = iteration + 1;
-    result.last_displacement = moved / double(m);
-    if (std::getenv("SNAKE_TRACE")) {
-      double mx = 0; int capped = 0;
-      std::vector<double> d;
+    // Convergence: the mean net displacement across the line over a window of iterations, so a
+    // point oscillating by a small amount does not keep the snake running.
+    const int span = iteration + 1 - window_start;
+    if (span >= window) {
+      double net = 0;
+      if (std::getenv("SNAKE_PERPOINT"))
       for (std::size_t i = 1; i + 1 < n; ++i) {
-        const Eigen::Vector2d target(new_x[Eigen::Index(i - 1)], new_y[Eigen::Index(i - 1)]);
-        const double di = (target - Eigen::Vector2d(x[Eigen::Index(i)], y[Eigen::Index(i)])).norm();
-        d.push_back(di); mx = std::max(mx, di);
-        Eigen::Vector2d st = o.tau * o.kappa * force_at(points[i]);
-        if (st.norm() > o.max_step) ++capped;
+        const Eigen::Vector2d chord = points[i + 1].uv - points[i - 1].uv;
+        const Eigen::Vector2d d = points[i].uv - window_start_uv[i];
+        net += chord.norm() > 0 ? std::abs(cross2(chord, d)) / chord.norm() : d.norm();
       }
-      std::sort(d.begin(), d.end());
-      int reversed = 0; double dotsum = 0, nsum = 0;
-      std::vector<Eigen::Vector2d> disp;
-      for (std::size_t i = 1; i + 1 < n; ++i) disp.push_back(Eigen::Vector2d(new_x[Eigen::Index(i - 1)], new_y[Eigen::Index(i - 1)]) - Eigen::Vector2d(x[Eigen::Index(i)], y[Eigen::Index(i)]));
-      if (prev_disp.size() == disp.size()) for (std::size_t i = 0; i < disp.size(); ++i) { if (disp[i].dot(prev_disp[i]) < 0) ++reversed; dotsum += disp[i].dot(prev_disp[i]); nsum += disp[i].squaredNorm(); }
-      prev_disp = disp;
-      // net displacement measure
-      Eigen::Vector2d tot = Eigen::Vector2d::Zero(); for (auto& q : disp) tot += q;
-      double tang = 0, norm_ = 0;
-      for (std::size_t i = 1; i + 1 < n; ++i) { Eigen::Vector2d c = Eigen::Vector2d(x[Eigen::Index(i+1)]-x[Eigen::Index(i-1)], y[Eigen::Index(i+1)]-y[Eigen::Index(i-1)]).normalized(); tang += std::abs(disp[i-1].dot(c)); norm_ += std::abs(cross2(c, disp[i-1])); }
-      std::fprintf(stderr, "   reversed %d corr %.2f tang %.2e norm %.2e ", reversed, nsum > 0 ? dotsum / nsum : 0.0, tang/double(m), norm_/double(m));
-      if (std::getenv("SNAKE_DUMP") && iteration >= std::atoi(std::getenv("SNAKE_DUMP")) && iteration < std::atoi(std::getenv("SNAKE_DUMP")) + 2) {
+      else
+      for (std::size_t i = 1; i + 1 < n; ++i) {
+        double best = HUGE_VAL;
+        for (std::size_t j = 0; j + 1 < window_start_uv.size(); ++j)
+          best = std::min(best, (closest_on_segment(points[i].uv, window_start_uv[j], window_start_uv[j + 1]) - points[i].uv).squaredNorm());
+        net += std::sqrt(best);
+      }
+      result.last_displacement = net / (unit * double(m) * span);
+      if (std::getenv("SNAKE_TRACE")) std::fprintf(stderr, "it %d n %zu net %.2e\n", iteration, n, result.last_displacement);
+      if (std::getenv("SNAKE_DUMP") && iteration >= std::atoi(std::getenv("SNAKE_DUMP")) && iteration < std::atoi(std::getenv("SNAKE_DUMP")) + 20)
         for (std::size_t i = 1; i + 1 < n; ++i) {
-          Eigen::Vector2d st = o.tau * o.kappa * force_at(points[i]);
-          Eigen::Vector2d c = Eigen::Vector2d(x[Eigen::Index(i+1)]-x[Eigen::Index(i-1)], y[Eigen::Index(i+1)]-y[Eigen::Index(i-1)]).normalized();
-          Eigen::Vector2d tgt(new_x[Eigen::Index(i - 1)], new_y[Eigen::Index(i - 1)]);
-          Eigen::Vector2d now = points[i].uv / unit;
-          std::fprintf(stderr, "  p%2zu uv %8.3f %8.3f gap %.3f F %.3f Fn %.3f dispT %+.2e dispN %+.2e clampedby %.2e bary %.2f %.2f %.2f\n", i, x[Eigen::Index(i)], y[Eigen::Index(i)],
-            std::hypot(x[Eigen::Index(i)]-x[Eigen::Index(i-1)], y[Eigen::Index(i)]-y[Eigen::Index(i-1)]), st.norm(), cross2(c, st),
-            disp[i-1].dot(c), cross2(c, disp[i-1]), (tgt - now).norm(), points[i].barycentric[0], points[i].barycentric[1], points[i].barycentric[2]);
+          const Eigen::Vector2d chord = points[i + 1].uv - points[i - 1].uv;
+          const Eigen::Vector2d d = points[i].uv - window_start_uv[i];
+          const auto& tri = strip.triangles[points[i].triangle];
+          std::fprintf(stderr, "  p%2zu uv %8.3f %8.3f net %+.2e gap %.3f Fn %+.3f tri %u bary %.2f %.2f %.2f rings %d %d %d\n", i, points[i].uv.x()/unit, points[i].uv.y()/unit, cross2(chord.normalized(), d)/unit,
+            (points[i].uv - points[i-1].uv).norm()/unit, o.kappa * cross2(chord.normalized(), force_at(points[i])), points[i].triangle, points[i].barycentric[0], points[i].barycentric[1], points[i].barycentric[2],
+            strip.ring[tri[0]], strip.ring[tri[1]], strip.ring[tri[2]]);
         }
+      if (result.last_displacement < o.tolerance) {
+        result.converged = true;
+        break;
       }
-      std::fprintf(stderr, "it %d n %zu mean %.2e med %.2e max %.2e capped %d\n", iteration, n, moved / double(m), d[d.size()/2], mx, capped);
+      window_start = iteration + 1;
+      window_start_uv.clear();
+      for (const auto& p : points) window_start_uv.push_back(p.uv);
     }
-    if (iteration >= o.resample_every && result.last_displacement < o.tolerance) {
-      result.converged = true;
-      break;
-    }
+  }
+  if (std::getenv("SNAKE_UVTURN")) {
+    double tt = 0;
+    for (std::size_t i = 1; i + 1 < points.size(); ++i) { Eigen::Vector2d a = points[i].uv - points[i-1].uv, b = points[i+1].uv - points[i].uv; tt += std::abs(std::atan2(cross2(a, b), a.dot(b))); }
+    std::fprintf(stderr, "uvturn %.3f n %zu it %d conv %d\n", tt, points.size(), result.iterations, int(result.converged));
   }
   return result;
 }

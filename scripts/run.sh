@@ -1,16 +1,25 @@
 #!/usr/bin/env bash
-# The main job: set up, build, and detect a feature line on the bundled sample mesh.
+# The main job: set up, build, show the CLI on the bundled sample, then serve it over HTTP
+# (Ctrl-C stops the server).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 build=${BUILD_DIR:-build}
 sample=samples/ridge_field.off
 keys=$(cat samples/ridge_field.keys)
-echo "== featureline info $sample"
-"$build/cli/featureline" info "$sample" | jq -c '{vertices, faces, components, mean_edge, curvature}'
 echo "== featureline detect $sample --keys $keys"
-"$build/cli/featureline" detect "$sample" --keys "$keys" --out "$build/sample_line.json"
-jq -c '{keys, initial: {method: .initial.method, vertices: (.initial.vertices|length), length: .initial.length},
-        refined: {points: (.refined.points|length), length: .refined.length}, stats: .stats.timings_ms}' "$build/sample_line.json"
-"$build/cli/featureline" detect "$sample" --keys "$keys" --out "$build/sample_line.glb"
-echo "wrote $build/sample_line.json and $build/sample_line.glb (mesh + initial and refined lines)"
+"$build/cli/featureline" detect "$sample" --keys "$keys" |
+  jq -c '{keys, initial: {method: .initial.method, vertices: (.initial.vertices|length), length: .initial.length},
+          refined: {points: (.refined.points|length), length: .refined.length}, timings_ms: .stats.timings_ms}'
+echo "== featureline-server with $sample preloaded"
+port=${PORT:-8080}
+"$build/server/featureline-server" --port "$port" --preload "$sample" | while IFS= read -r line; do
+  echo "$line"
+  case "$line" in
+    "preloaded "*)
+      id=${line##* }
+      echo "  curl -s -X POST http://127.0.0.1:$port/v1/meshes/$id/feature-lines -H 'Content-Type: application/json' -d '{\"keys\": [${keys//,/, }]}'"
+      echo "  curl -s --data-binary @your-mesh.obj -H 'Content-Type: application/octet-stream' http://127.0.0.1:$port/v1/meshes"
+      ;;
+  esac
+done

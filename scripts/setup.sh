@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs the Debian packages Featureline needs, only those missing (idempotent), then
-# configures and builds into build/ (or $BUILD_DIR) with the given extra CMake arguments.
+# Installs what Featureline needs, only what is missing (idempotent): Debian packages with
+# apt-get, the npm packages of package.json with npm; then configures and builds into build/
+# (or $BUILD_DIR) with the given extra CMake arguments.
 #   scripts/setup.sh [cmake args...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,11 +13,17 @@ missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# Node.js runs the contract and glTF validators; any installed node and npm will do.
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then missing+=(nodejs npm); fi
 if [ ${#missing[@]} -gt 0 ]; then
   echo "setup: installing ${missing[*]}"
   if [ "$(id -u)" != 0 ]; then sudo=sudo; else sudo=; fi
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+if [ ! -f node_modules/.package-lock.json ] || [ package-lock.json -nt node_modules/.package-lock.json ]; then
+  echo "setup: npm ci"
+  npm ci --no-audit --no-fund --loglevel=error
 fi
 
 build=${BUILD_DIR:-build}

@@ -104,9 +104,7 @@ int main(int argc, char** argv) {
     std::printf("featureline-server listening on %s\n", base.c_str());
     for (const auto& [path, id] : preloaded) {
       std::printf("preloaded %s as mesh %s\n", path.c_str(), id.c_str());
-      std::printf("try:\n  curl -s %s/v1/meshes/%s\n", base.c_str(), id.c_str());
-      std::printf("  curl -s -X POST %s/v1/meshes/%s/feature-lines -H 'Content-Type: application/json' -d '{\"keys\": [701, 963, 1184]}'\n",
-                  base.c_str(), id.c_str());
+      std::printf("  curl -s %s/v1/meshes/%s\n", base.c_str(), id.c_str());
     }
     if (!options.web_root.empty()) std::printf("open %s/\n", base.c_str());
     std::fflush(stdout);

@@ -445,6 +445,10 @@ struct FeaturelineServer::Impl {
     } else if (accepts(req, "model/gltf+json")) {
       answer = "gltf";
     }
+    const std::string type = media_type(req.get_header_value("Content-Type"));
+    if (!type.empty() && type != "application/json")
+      throw HttpError(415, "unsupported_format",
+                      "send the request as application/json (curl: -H 'Content-Type: application/json'), not \"" + type + "\"");
     if (req.body.size() > kMaxJsonBytes) throw HttpError(413, "payload_too_large", "the request body exceeds 4 MiB");
     const json body = json::parse(req.body);
     if (!body.is_object()) throw InvalidInputError("the request body must be a JSON object");
