@@ -382,6 +382,8 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
   std::size_t factored_size = 0;
   Eigen::VectorXd x, y, rhs_x, rhs_y, rhs;
   std::vector<Eigen::Vector2d> normal, window_start_uv;
+  std::vector<double> step_limit, last_step;
+  double damping = 1, last_net = HUGE_VAL;
   int window_start = 0;
   const int window = 2 * o.resample_every;
   for (int iteration = 0; iteration < o.max_iterations; ++iteration) {
@@ -389,7 +391,8 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
       std::fprintf(stderr, "before resample it %d:\n", iteration);
       for (std::size_t i = 0; i < points.size(); ++i) std::fprintf(stderr, "  p%2zu uv %8.3f %8.3f gap %.3f\n", i, points[i].uv.x()/unit, points[i].uv.y()/unit, i ? (points[i].uv - points[i-1].uv).norm()/unit : 0.0);
     }
-    if (iteration % o.resample_every == 0 && (resample() || iteration == 0) && (std::getenv("SNAKE_PERPOINT") || iteration == 0)) {
+    if (iteration % o.resample_every == 0 && resample()) step_limit.clear();
+    if (iteration == 0) {
       window_start = iteration;
       window_start_uv.clear();
       for (const auto& p : points) window_start_uv.push_back(p.uv);
@@ -437,8 +440,15 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
       if (solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
       factored_size = n;
       const Eigen::VectorXd step = solver.solve(rhs);
+      if (step_limit.size() != n) step_limit.assign(n, o.max_step), last_step.assign(n, 0.0);
+      const bool adapt = std::getenv("SNAKE_RPROP") != nullptr;
       for (std::size_t i = 1; i + 1 < n; ++i) {
-        const double si = std::clamp(step[Eigen::Index(i - 1)], -o.max_step, o.max_step);
+        double si = std::clamp(damping * step[Eigen::Index(i - 1)], -step_limit[i], step_limit[i]);
+        if (adapt) {
+          if (si * last_step[i] < 0) step_limit[i] *= 0.5, si = std::clamp(si, -step_limit[i], step_limit[i]);
+          else step_limit[i] = std::min(o.max_step, 1.2 * step_limit[i]);
+          last_step[i] = si;
+        }
         targets[i] = (Eigen::Vector2d(x[Eigen::Index(i)], y[Eigen::Index(i)]) + si * normal[i]) * unit;
       }
     } else {
@@ -506,9 +516,12 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
       if (std::getenv("SNAKE_DUMP") && iteration >= std::atoi(std::getenv("SNAKE_DUMP")) && iteration < std::atoi(std::getenv("SNAKE_DUMP")) + 20)
         for (std::size_t i = 1; i + 1 < n; ++i) {
           const Eigen::Vector2d chord = points[i + 1].uv - points[i - 1].uv;
-          const Eigen::Vector2d d = points[i].uv - window_start_uv[i];
+          double best = HUGE_VAL;
+          for (std::size_t j = 0; j + 1 < window_start_uv.size(); ++j)
+            best = std::min(best, (closest_on_segment(points[i].uv, window_start_uv[j], window_start_uv[j + 1]) - points[i].uv).norm());
+          const Eigen::Vector2d d = chord.normalized() * best;
           const auto& tri = strip.triangles[points[i].triangle];
-          std::fprintf(stderr, "  p%2zu uv %8.3f %8.3f net %+.2e gap %.3f Fn %+.3f tri %u bary %.2f %.2f %.2f rings %d %d %d\n", i, points[i].uv.x()/unit, points[i].uv.y()/unit, cross2(chord.normalized(), d)/unit,
+          std::fprintf(stderr, "  p%2zu uv %8.3f %8.3f net %+.2e dist %.2e gap %.3f Fn %+.3f tri %u bary %.2f %.2f %.2f rings %d %d %d\n", i, points[i].uv.x()/unit, points[i].uv.y()/unit, cross2(chord.normalized(), d)/unit, best/unit,
             (points[i].uv - points[i-1].uv).norm()/unit, o.kappa * cross2(chord.normalized(), force_at(points[i])), points[i].triangle, points[i].barycentric[0], points[i].barycentric[1], points[i].barycentric[2],
             strip.ring[tri[0]], strip.ring[tri[1]], strip.ring[tri[2]]);
         }
@@ -516,6 +529,8 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
         result.converged = true;
         break;
       }
+      if (std::getenv("SNAKE_DAMP") && result.last_displacement > last_net) damping *= 0.5;
+      last_net = result.last_displacement;
       window_start = iteration + 1;
       window_start_uv.clear();
       for (const auto& p : points) window_start_uv.push_back(p.uv);
