@@ -201,7 +201,8 @@ struct FeaturelineServer::Impl {
     json j = mesh_info_to_json(*s.mesh, s.load_ms);
     j["mesh_id"] = s.id;
     j["format"] = to_string(s.format);
-    j["expires_in_s"] = cache.expires_in_s(s.id);
+    const double expires = cache.expires_in_s(s.id);
+    j["expires_in_s"] = expires < 0 ? json(nullptr) : json(expires);  // null: preloaded, never expires
     return j;
   }
 
@@ -520,6 +521,7 @@ std::string FeaturelineServer::preload(const std::string& path) {
   s.format = raw.format;
   s.mesh = prepare_mesh(std::move(raw));
   s.bytes = s.mesh->memory_bytes();
+  s.pinned = true;  // the bundled sample stays available however long the server runs
   auto stored = impl_->cache.insert(std::move(s));
   if (!stored) throw std::runtime_error(path + " is larger than the whole cache budget");
   return (*stored)->id;

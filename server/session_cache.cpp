@@ -52,8 +52,9 @@ void SessionCache::expire_idle_locked(Clock::time_point now) {
 }
 
 std::optional<std::shared_ptr<const MeshSession>> SessionCache::insert(MeshSession session) {
-  if (session.bytes > options_.byte_budget) return std::nullopt;
   std::lock_guard<std::mutex> lock(mutex_);
+  // Evicting can only free unpinned bytes: refuse up front rather than evict in vain.
+  if (pinned_bytes_ + session.bytes > options_.byte_budget) return std::nullopt;
   const auto now = options_.now();
   expire_idle_locked(now);
   do session.id = random_session_id();
@@ -67,9 +68,15 @@ std::optional<std::shared_ptr<const MeshSession>> SessionCache::insert(MeshSessi
     entries_.erase(it);
   }
   auto shared = std::make_shared<const MeshSession>(std::move(session));
-  lru_.push_front(shared->id);
-  entries_.emplace(shared->id, Entry{shared, now, lru_.begin()});
+  // Pinned sessions stay out of the LRU list, so neither expiry nor eviction ever sees them.
+  auto position = lru_.end();
+  if (!shared->pinned) {
+    lru_.push_front(shared->id);
+    position = lru_.begin();
+  }
+  entries_.emplace(shared->id, Entry{shared, now, position});
   bytes_ += shared->bytes;
+  if (shared->pinned) pinned_bytes_ += shared->bytes;
   ++counters_.inserts;
   return shared;
 }
@@ -87,7 +94,7 @@ std::shared_ptr<const MeshSession> SessionCache::find(const std::string& id, Mis
     return nullptr;
   }
   it->second.last_used = now;
-  lru_.splice(lru_.begin(), lru_, it->second.position);
+  if (!it->second.session->pinned) lru_.splice(lru_.begin(), lru_, it->second.position);
   return it->second.session;
 }
 
@@ -96,7 +103,8 @@ bool SessionCache::erase(const std::string& id) {
   auto it = entries_.find(id);
   if (it == entries_.end()) return false;
   bytes_ -= it->second.session->bytes;
-  lru_.erase(it->second.position);
+  if (it->second.session->pinned) pinned_bytes_ -= it->second.session->bytes;
+  else lru_.erase(it->second.position);
   entries_.erase(it);
   return true;
 }
@@ -118,6 +126,7 @@ double SessionCache::expires_in_s(const std::string& id) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = entries_.find(id);
   if (it == entries_.end()) return 0;
+  if (it->second.session->pinned) return -1;  // never
   const auto left = options_.idle_ttl - (options_.now() - it->second.last_used);
   return std::max(0.0, std::chrono::duration<double>(left).count());
 }

@@ -26,6 +26,7 @@ struct MeshSession {
   MeshFormat format = MeshFormat::obj;
   double load_ms = 0;
   std::size_t bytes = 0;  ///< what the session costs in the budget (PreparedMesh::memory_bytes)
+  bool pinned = false;    ///< preloaded at start: never expires nor is evicted (still counts in the budget)
 };
 
 /// 128 random bits from the operating system's CSPRNG (getrandom), as 32 lowercase hex digits.
@@ -66,7 +67,7 @@ class SessionCache {
 
   Stats stats() const;
   std::chrono::seconds idle_ttl() const { return options_.idle_ttl; }
-  /// Seconds until `id` expires if left unused (0 when unknown).
+  /// Seconds until `id` expires if left unused (0 when unknown, -1 for pinned sessions).
   double expires_in_s(const std::string& id) const;
 
  private:
@@ -83,6 +84,7 @@ class SessionCache {
   std::unordered_map<std::string, Entry> entries_;
   std::list<std::string> lru_;
   std::size_t bytes_ = 0;
+  std::size_t pinned_bytes_ = 0;
   Stats counters_;
   // Recently removed ids and why, so a 404 can say "expired" or "evicted" (bounded).
   std::unordered_map<std::string, Miss> gone_;

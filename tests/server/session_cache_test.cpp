@@ -94,6 +94,26 @@ TEST(SessionCache, EraseFreesMemoryOnlyWhenTheLastUserLetsGo) {
   EXPECT_EQ(cache.stats().bytes, 0u);
 }
 
+TEST(SessionCache, PinnedSessionsNeverExpireNorAreEvicted) {
+  FakeClock clock;
+  SessionCache cache({1000, std::chrono::seconds(60), clock.fn()});
+  MeshSession pinned = session_of_bytes(600);
+  pinned.pinned = true;
+  const auto sample = (*cache.insert(std::move(pinned)))->id;
+  const auto a = (*cache.insert(session_of_bytes(300)))->id;
+  const auto b = (*cache.insert(session_of_bytes(300)))->id;  // evicts a, not the pinned sample
+  EXPECT_EQ(cache.find(a), nullptr);
+  EXPECT_NE(cache.find(b), nullptr);
+  EXPECT_FALSE(cache.insert(session_of_bytes(500)).has_value());  // cannot fit beside the pinned one
+  EXPECT_NE(cache.find(b), nullptr);                               // and nothing was evicted in vain
+  clock.now += std::chrono::hours(100);
+  EXPECT_NE(cache.find(sample), nullptr);
+  EXPECT_EQ(cache.find(b), nullptr);
+  EXPECT_EQ(cache.expires_in_s(sample), -1);
+  EXPECT_TRUE(cache.erase(sample));
+  EXPECT_EQ(cache.stats().bytes, 0u);
+}
+
 TEST(SessionCache, ConcurrentUseKeepsTheBudget) {
   SessionCache cache({5000, std::chrono::seconds(60)});
   std::vector<std::thread> threads;
