@@ -123,6 +123,7 @@ void apply_options_json(const json& j, FeatureLineOptions& o) {
     sr.choice("force", so.force, parse_snake_force, "paper, smooth");
     sr.boolean("normal_force_only", so.normal_force_only);
     sr.number("sharp_crest_drop", so.sharp_crest_drop, 0, 0.99);
+    sr.boolean("normal_step", so.normal_step);
     sr.finish();
   }
   r.finish();
@@ -159,7 +160,8 @@ json options_to_json(const FeatureLineOptions& o) {
         {"resample_every", o.snake.resample_every},
         {"force", to_string(o.snake.force)},
         {"normal_force_only", o.snake.normal_force_only},
-        {"sharp_crest_drop", o.snake.sharp_crest_drop}}},
+        {"sharp_crest_drop", o.snake.sharp_crest_drop},
+        {"normal_step", o.snake.normal_step}}},
   };
 }
 

@@ -4,8 +4,6 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 #include "engine/errors.h"
 
@@ -70,13 +68,13 @@ bool walk(const FeatureStrip& strip, const FlatStrip& flat, std::uint32_t start,
   return false;
 }
 
-// Moves `point` along the straight segment to `target`, across strip triangles, stopping where
-// the segment leaves the valid strip (its border or a folded triangle). Unlike walk(), a point
-// stopped by the border keeps its position along the segment instead of sliding to the border
-// point nearest the target, so a point pushed outwards iteration after iteration stays put.
+// Moves `point` straight towards `target` across strip triangles, stopping where the segment
+// leaves the valid strip (its border or a folded triangle). Unlike walk(), a point stopped by
+// the border stays on the segment instead of sliding to the border point nearest the target,
+// so a point pushed outwards iteration after iteration stays put rather than creeping along.
 void move_along_segment(const FeatureStrip& strip, const FlatStrip& flat, StripPoint& point, const Eigen::Vector2d& target) {
   std::uint32_t t = point.triangle;
-  Eigen::Vector2d q = point.uv;
+  Eigen::Vector3d at_q = point.barycentric;  // of the current position q in triangle t
   const std::size_t guard = 4 * strip.triangles.size() + 16;
   for (std::size_t step = 0; step < guard; ++step) {
     const auto& tri = strip.triangles[t];
@@ -90,29 +88,72 @@ void move_along_segment(const FeatureStrip& strip, const FlatStrip& flat, StripP
       point.uv = target;
       return;
     }
-    // The edge through which the segment q -> target leaves this triangle.
-    const Eigen::Vector3d at_q = barycentric_of(q, a, b, c).cwiseMax(0.0);
+    // Leave through the edge whose barycentric coordinate reaches zero first along q -> target.
+    at_q = at_q.cwiseMax(0.0);
     int exit = -1;
-    double exit_s = HUGE_VAL;
+    double exit_at = HUGE_VAL;
     for (int k = 0; k < 3; ++k) {
       if (at_target[k] >= 0) continue;
       const double s = at_q[k] / (at_q[k] - at_target[k]);
-      if (s < exit_s) exit_s = s, exit = k;
+      if (s < exit_at) exit_at = s, exit = k;
     }
-    const Eigen::Vector3d at_exit = (at_q + exit_s * (at_target - at_q)).cwiseMax(0.0);
-    const Eigen::Vector3d bary = at_exit / at_exit.sum();
-    q = bary[0] * a + bary[1] * b + bary[2] * c;
+    Eigen::Vector3d at_exit = (at_q + exit_at * (at_target - at_q)).cwiseMax(0.0);
+    at_exit /= at_exit.sum();
+    const Eigen::Vector2d q = at_exit[0] * a + at_exit[1] * b + at_exit[2] * c;
     const std::int32_t next = strip.triangle_neighbors[t][exit];
-    if (next >= 0 && flat.triangle_valid[std::size_t(next)]) {
-      t = std::uint32_t(next);
-      continue;
+    if (next < 0 || !flat.triangle_valid[std::size_t(next)]) {
+      point.triangle = t;
+      point.barycentric = at_exit;
+      point.uv = q;
+      return;
     }
-    point.triangle = t;
-    point.barycentric = bary;
-    point.uv = q;
-    return;
+    t = std::uint32_t(next);
+    const auto& n = strip.triangles[t];
+    at_q = barycentric_of(q, flat.uv[n[0]], flat.uv[n[1]], flat.uv[n[2]]);
   }
-  // A folded layout made the walk cycle: leave the point where it was.
+  // A folded layout made the walk cycle: the point stays where it was.
+}
+
+// Mean distance of the interior points from the polyline `before` (same units as uv). Each
+// point is compared with the segments near its proportional position only, so the cost is
+// linear; resampling shifts indices by a few at most.
+double mean_distance_to(const std::vector<StripPoint>& points, const std::vector<Eigen::Vector2d>& before) {
+  const std::size_t n = points.size(), nb = before.size();
+  if (n <= 2 || nb < 2) return 0;
+  const std::size_t reach = 8 + (n > nb ? n - nb : nb - n);
+  double sum = 0;
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const std::size_t centre = std::size_t(std::lround(double(i) * double(nb - 1) / double(n - 1)));
+    const std::size_t first = centre > reach ? centre - reach : 0;
+    const std::size_t last = std::min(nb - 2, centre + reach);
+    double best = HUGE_VAL;
+    for (std::size_t j = first; j <= last; ++j)
+      best = std::min(best, (closest_on_segment(points[i].uv, before[j], before[j + 1]) - points[i].uv).squaredNorm());
+    sum += std::sqrt(best);
+  }
+  return sum / double(n - 2);
+}
+
+// Moves the interior points along the polyline they form, the fraction `share` of the way to
+// even spacing by arc length: a move along the line that keeps its shape (up to the chords) and
+// leaves the bending term nothing to pull points together with.
+void spread_evenly(const FeatureStrip& strip, const FlatStrip& flat, std::vector<StripPoint>& points, double share) {
+  const std::size_t n = points.size();
+  if (n <= 2) return;
+  std::vector<double> arc(n, 0.0);
+  for (std::size_t i = 1; i < n; ++i) arc[i] = arc[i - 1] + (points[i].uv - points[i - 1].uv).norm();
+  std::vector<StripPoint> spread(points);
+  std::size_t segment = 0;
+  for (std::size_t k = 1; k + 1 < n; ++k) {
+    const double at = arc[k] + share * (arc.back() * double(k) / double(n - 1) - arc[k]);
+    while (segment + 2 < n && arc[segment + 1] < at) ++segment;
+    const double length = arc[segment + 1] - arc[segment];
+    const double f = length > 0 ? std::clamp((at - arc[segment]) / length, 0.0, 1.0) : 0.0;
+    StripPoint p = points[f < 0.5 ? segment : segment + 1];
+    move_along_segment(strip, flat, p, points[segment].uv + f * (points[segment + 1].uv - points[segment].uv));
+    spread[k] = p;
+  }
+  points.swap(spread);
 }
 
 // (I + tau A) restricted to the interior points, A = alpha D1^T D1 + beta D2^T D2 built from the
@@ -257,9 +298,11 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
       if (weight[v] > 0) vertex_gradient[v] /= weight[v];
     zero_gradient_across_sharp_crests(strip, flat, potential, o.sharp_crest_drop, vertex_gradient);
   }
-  // Jacobian of the smooth force, constant per triangle: F = sum_k lambda_k g_k.
-  std::vector<Eigen::Matrix2d> force_jacobian(nt, Eigen::Matrix2d::Zero());
-  if (o.force == SnakeForce::smooth)
+  // The smooth force F = sum_k lambda_k g_k is linear in each triangle; its Jacobian
+  // sum_k g_k grad(lambda_k)^T gives the force's restoring stiffness for the normal step.
+  std::vector<Eigen::Matrix2d> force_jacobian;
+  if (o.force == SnakeForce::smooth) {
+    force_jacobian.assign(nt, Eigen::Matrix2d::Zero());
     for (std::size_t t = 0; t < nt; ++t) {
       if (!flat.triangle_valid[t]) continue;
       const auto& tri = strip.triangles[t];
@@ -270,6 +313,7 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
         force_jacobian[t] += vertex_gradient[tri[k]] * (Eigen::Vector2d(-e.y(), e.x()) / twice_area).transpose();
       }
     }
+  }
   auto force_at = [&](const StripPoint& p) -> Eigen::Vector2d {
     if (o.force == SnakeForce::paper) return triangle_gradient[p.triangle];
     const auto& tri = strip.triangles[p.triangle];
@@ -319,146 +363,116 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
   }
   points.push_back(point_at_vertex(strip.line.back()));
 
-  // Resampling: points closer than h/2 are deleted, gaps over 3h/2 get evenly spaced new points.
-  // Returns whether the point set changed.
+  // Damping of the moves (see the convergence test below).
+  double damping = 1;
+  // Paper: points farther apart than 3h/2 get points between them, points closer than h/2 are
+  // deleted. The normal step then spreads them evenly, as it never moves them along the line.
   auto resample = [&]() {
     std::vector<StripPoint> next;
     next.reserve(points.size() + 8);
     next.push_back(points.front());
-    bool changed = false;
     for (std::size_t i = 1; i < points.size(); ++i) {
       const bool last = i + 1 == points.size();
       const double gap = (points[i].uv - next.back().uv).norm();
-      if (!last && gap < 0.5 * h) {  // too close: delete
-        changed = true;
-        continue;
-      }
-      if (gap > 1.5 * h) {  // too far: insert evenly
+      if (!last && gap < 0.5 * h) continue;  // too close: delete
+      if (gap > 1.5 * h) {                     // too far: insert evenly
         const int pieces = int(std::ceil(gap / h));
         const StripPoint from = next.back();
         for (int k = 1; k < pieces; ++k) {
           StripPoint p = from;
           walk(strip, flat, from.triangle, from.uv + (points[i].uv - from.uv) * (double(k) / pieces), p);
           next.push_back(p);
-          changed = true;
         }
       }
       next.push_back(points[i]);
     }
     // the last kept interior point may now sit too close to the pinned end
-    if (next.size() > 2 && (next.back().uv - next[next.size() - 2].uv).norm() < 0.5 * h) {
-      next.erase(next.end() - 2);
-      changed = true;
-    }
+    if (next.size() > 2 && (next.back().uv - next[next.size() - 2].uv).norm() < 0.5 * h) next.erase(next.end() - 2);
     points.swap(next);
-    if (std::getenv("SNAKE_RESPACE") && points.size() > 2) {
-      // Even spacing along the polyline (a tangential move: the line's shape is kept).
-      std::vector<double> arc(points.size(), 0.0);
-      for (std::size_t i = 1; i < points.size(); ++i) arc[i] = arc[i - 1] + (points[i].uv - points[i - 1].uv).norm();
-      const double total = arc.back();
-      std::vector<StripPoint> spaced(points);
-      std::size_t seg = 0;
-      for (std::size_t k = 1; k + 1 < points.size(); ++k) {
-        const double sk = total * double(k) / double(points.size() - 1);
-        while (seg + 2 < points.size() && arc[seg + 1] < sk) ++seg;
-        const double len = arc[seg + 1] - arc[seg];
-        const double f = len > 0 ? std::clamp((sk - arc[seg]) / len, 0.0, 1.0) : 0.0;
-        const Eigen::Vector2d q = points[seg].uv + f * (points[seg + 1].uv - points[seg].uv);
-        StripPoint p = f < 0.5 ? points[seg] : points[seg + 1];
-        move_along_segment(strip, flat, p, q);
-        spaced[k] = p;
-      }
-      points.swap(spaced);
-    }
-    return changed;
+    if (o.normal_step) spread_evenly(strip, flat, points, damping);
   };
-
-  const bool normal_step = std::getenv("SNAKE_OLD") == nullptr;
-  const double tau = std::getenv("SNAKE_TAU") ? std::atof(std::getenv("SNAKE_TAU")) : o.tau;
-  const bool linearize = std::getenv("SNAKE_NOLIN") == nullptr;
 
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> solver;
   Eigen::SparseMatrix<double> A, M;
+  std::vector<Eigen::Triplet<double>> triplets;
   std::size_t factored_size = 0;
-  Eigen::VectorXd x, y, rhs_x, rhs_y, rhs;
-  std::vector<Eigen::Vector2d> normal, window_start_uv;
-  std::vector<double> step_limit, last_step;
-  double damping = 1, last_net = HUGE_VAL;
-  int window_start = 0;
+  Eigen::VectorXd x, y, rhs_x, rhs_y;
+  std::vector<Eigen::Vector2d> normal, targets;
+  // Convergence is judged on the line's shape over windows of an even number of iterations, so
+  // a point swinging between two states cancels out. A window whose shape change exceeds the
+  // previous one's means the line is not settling (a point held by the strip's border, a force
+  // kink); the step is halved then, so the snake always comes to rest.
   const int window = 2 * o.resample_every;
+  std::vector<Eigen::Vector2d> window_start;
+  double last_change = HUGE_VAL;
   for (int iteration = 0; iteration < o.max_iterations; ++iteration) {
-    if (std::getenv("SNAKE_DUMP2") && iteration >= std::atoi(std::getenv("SNAKE_DUMP2")) && iteration < std::atoi(std::getenv("SNAKE_DUMP2")) + 11 && iteration % o.resample_every == 0) {
-      std::fprintf(stderr, "before resample it %d:\n", iteration);
-      for (std::size_t i = 0; i < points.size(); ++i) std::fprintf(stderr, "  p%2zu uv %8.3f %8.3f gap %.3f\n", i, points[i].uv.x()/unit, points[i].uv.y()/unit, i ? (points[i].uv - points[i-1].uv).norm()/unit : 0.0);
-    }
-    if (iteration % o.resample_every == 0 && resample()) step_limit.clear();
-    if (iteration == 0) {
-      window_start = iteration;
-      window_start_uv.clear();
-      for (const auto& p : points) window_start_uv.push_back(p.uv);
-    }
+    if (iteration % o.resample_every == 0) resample();
     const std::size_t n = points.size();
     if (n <= 2) {
       result.converged = true;
       break;
     }
+    if (iteration % window == 0) {
+      window_start.clear();
+      for (const auto& p : points) window_start.push_back(p.uv);
+    }
     const std::size_t m = n - 2;  // interior unknowns
+    if (Eigen::Index(n) != A.rows()) A = stiffness(n, o.alpha, o.beta);
     x.resize(Eigen::Index(n));
     y.resize(Eigen::Index(n));
     for (std::size_t i = 0; i < n; ++i) x[Eigen::Index(i)] = points[i].uv.x() / unit, y[Eigen::Index(i)] = points[i].uv.y() / unit;
-    if (n != factored_size) A = stiffness(n, o.alpha, o.beta);
-    std::vector<Eigen::Vector2d> targets(n);
-    if (normal_step) {
-      // Implicit step restricted to motion along each point's normal:
-      // (I + tau N'AN + tau K) s = tau N'(kappa F - A v), K the force's restoring stiffness.
+    targets.assign(n, Eigen::Vector2d::Zero());
+    if (o.normal_step) {
+      // Eq. (15) restricted to moves s_i along each point's normal n_i (N = diag(n_i)):
+      //   (I + tau N'AN + tau K) s = tau N'(kappa F - A v),
+      // K = diag(max(0, -kappa n_i' J n_i)) the smooth force's restoring stiffness (J its
+      // Jacobian), so steep forces do not overshoot. Tangential moves would only slide points
+      // along the line; the pinned ends enter through A v.
       normal.assign(n, Eigen::Vector2d::Zero());
       for (std::size_t i = 1; i + 1 < n; ++i) {
         const Eigen::Vector2d chord(x[Eigen::Index(i + 1)] - x[Eigen::Index(i - 1)], y[Eigen::Index(i + 1)] - y[Eigen::Index(i - 1)]);
-        if (chord.norm() > 0) normal[i] = Eigen::Vector2d(-chord.y(), chord.x()) / chord.norm();
+        const double length = chord.norm();
+        if (length > 0) normal[i] = Eigen::Vector2d(-chord.y(), chord.x()) / length;
       }
       const Eigen::VectorXd ax = A * x, ay = A * y;
-      std::vector<Eigen::Triplet<double>> triplets;
-      triplets.reserve(5 * m);
-      rhs.resize(Eigen::Index(m));
+      rhs_x.resize(Eigen::Index(m));
+      triplets.clear();
       for (std::size_t i = 1; i + 1 < n; ++i) {
-        const Eigen::Vector2d f = o.kappa * force_at(points[i]) - Eigen::Vector2d(ax[Eigen::Index(i)], ay[Eigen::Index(i)]);
-        rhs[Eigen::Index(i - 1)] = tau * normal[i].dot(f);
-        double stiff = 0;
-        if (linearize && o.force == SnakeForce::smooth) stiff = std::max(0.0, -o.kappa * normal[i].dot(force_jacobian[points[i].triangle] * normal[i]));
-        triplets.emplace_back(i - 1, i - 1, 1.0 + tau * stiff);
+        const Eigen::Vector2d residual = o.kappa * force_at(points[i]) - Eigen::Vector2d(ax[Eigen::Index(i)], ay[Eigen::Index(i)]);
+        rhs_x[Eigen::Index(i - 1)] = o.tau * normal[i].dot(residual);
+        double stiffness_i = 0;
+        if (!force_jacobian.empty())
+          stiffness_i = std::max(0.0, -o.kappa * normal[i].dot(force_jacobian[points[i].triangle] * normal[i]));
+        triplets.emplace_back(i - 1, i - 1, 1.0 + o.tau * stiffness_i);
       }
-      for (int k = 0; k < A.outerSize(); ++k)
+      for (Eigen::Index k = 0; k < A.outerSize(); ++k)
         for (Eigen::SparseMatrix<double>::InnerIterator it(A, k); it; ++it) {
           const auto r = std::size_t(it.row()), c = std::size_t(it.col());
-          if (r == 0 || c == 0 || r + 1 == n || c + 1 == n || r < c) continue;
-          triplets.emplace_back(r - 1, c - 1, tau * it.value() * normal[r].dot(normal[c]));
+          if (r == 0 || c == 0 || r + 1 == n || c + 1 == n) continue;
+          triplets.emplace_back(r - 1, c - 1, o.tau * it.value() * normal[r].dot(normal[c]));
         }
       M.resize(Eigen::Index(m), Eigen::Index(m));
       M.setFromTriplets(triplets.begin(), triplets.end());
       if (n != factored_size) solver.analyzePattern(M);
+      factored_size = n;
       solver.factorize(M);
       if (solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
-      factored_size = n;
-      const Eigen::VectorXd step = solver.solve(rhs);
-      if (step_limit.size() != n) step_limit.assign(n, o.max_step), last_step.assign(n, 0.0);
-      const bool adapt = std::getenv("SNAKE_RPROP") != nullptr;
+      const Eigen::VectorXd s = solver.solve(rhs_x);
       for (std::size_t i = 1; i + 1 < n; ++i) {
-        double si = std::clamp(damping * step[Eigen::Index(i - 1)], -step_limit[i], step_limit[i]);
-        if (adapt) {
-          if (si * last_step[i] < 0) step_limit[i] *= 0.5, si = std::clamp(si, -step_limit[i], step_limit[i]);
-          else step_limit[i] = std::min(o.max_step, 1.2 * step_limit[i]);
-          last_step[i] = si;
-        }
-        targets[i] = (Eigen::Vector2d(x[Eigen::Index(i)], y[Eigen::Index(i)]) + si * normal[i]) * unit;
+        const double move = std::clamp(damping * s[Eigen::Index(i - 1)], -o.max_step, o.max_step);
+        targets[i] = Eigen::Vector2d(x[Eigen::Index(i)], y[Eigen::Index(i)]) + move * normal[i];
       }
     } else {
+      // The paper's Eq. (15) on both coordinates: (I + tau A) v_{k+1} = v_k + tau kappa F, the
+      // force step capped so a point never jumps across a crest in one iteration.
       if (n != factored_size) {
-        Eigen::SparseMatrix<double> Mi = A.block(1, 1, Eigen::Index(m), Eigen::Index(m)) * tau;
+        Eigen::SparseMatrix<double> Mi = A.block(1, 1, Eigen::Index(m), Eigen::Index(m)) * o.tau;
         for (Eigen::Index i = 0; i < Eigen::Index(m); ++i) Mi.coeffRef(i, i) += 1.0;
         solver.compute(Mi);
         if (solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
         factored_size = n;
       }
+      // Pinned ends enter the right-hand side through A's coupling columns.
       Eigen::VectorXd ends_x = Eigen::VectorXd::Zero(Eigen::Index(n)), ends_y = Eigen::VectorXd::Zero(Eigen::Index(n));
       ends_x[0] = x[0], ends_x[Eigen::Index(n - 1)] = x[Eigen::Index(n - 1)];
       ends_y[0] = y[0], ends_y[Eigen::Index(n - 1)] = y[Eigen::Index(n - 1)];
@@ -466,7 +480,7 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
       rhs_x.resize(Eigen::Index(m));
       rhs_y.resize(Eigen::Index(m));
       for (std::size_t i = 1; i + 1 < n; ++i) {
-        Eigen::Vector2d step = tau * o.kappa * force_at(points[i]);
+        Eigen::Vector2d step = o.tau * o.kappa * force_at(points[i]);
         if (o.normal_force_only) {
           const Eigen::Vector2d chord = points[i + 1].uv - points[i - 1].uv;
           const double chord_len = chord.norm();
@@ -475,71 +489,29 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
         const double len = step.norm();
         if (len > o.max_step) step *= o.max_step / len;
         const auto r = Eigen::Index(i - 1);
-        rhs_x[r] = x[Eigen::Index(i)] + step.x() - tau * coupling_x[Eigen::Index(i)];
-        rhs_y[r] = y[Eigen::Index(i)] + step.y() - tau * coupling_y[Eigen::Index(i)];
+        rhs_x[r] = x[Eigen::Index(i)] + step.x() - o.tau * coupling_x[Eigen::Index(i)];
+        rhs_y[r] = y[Eigen::Index(i)] + step.y() - o.tau * coupling_y[Eigen::Index(i)];
       }
       const Eigen::VectorXd new_x = solver.solve(rhs_x), new_y = solver.solve(rhs_y);
-      for (std::size_t i = 1; i + 1 < n; ++i)
-        targets[i] = Eigen::Vector2d(new_x[Eigen::Index(i - 1)], new_y[Eigen::Index(i - 1)]) * unit;
-    }
-    for (std::size_t i = 1; i + 1 < n; ++i) {
-      const Eigen::Vector2d before = points[i].uv; const auto tb = points[i].triangle;
-      if (targets[i].allFinite()) {
-        if (std::getenv("SNAKE_OLDWALK")) walk(strip, flat, points[i].triangle, targets[i], points[i]);
-        else move_along_segment(strip, flat, points[i], targets[i]);
+      for (std::size_t i = 1; i + 1 < n; ++i) {
+        const Eigen::Vector2d target(new_x[Eigen::Index(i - 1)], new_y[Eigen::Index(i - 1)]);
+        const Eigen::Vector2d now(x[Eigen::Index(i)], y[Eigen::Index(i)]);
+        targets[i] = now + damping * (target - now);
       }
-      if (std::getenv("SNAKE_PT") && int(i) == std::atoi(std::getenv("SNAKE_PT")) && iteration > 200)
-        std::fprintf(stderr, "   it %d pt %zu tri %u->%u move %+.3e target-miss %.2e Fn %+.4f stiff %.3f\n", iteration, i, tb, points[i].triangle, normal_step ? cross2(Eigen::Vector2d(-normal[i].y(), normal[i].x()), points[i].uv - before)/unit : 0.0,
-          (targets[i] - points[i].uv).norm()/unit, o.kappa * normal[i].dot(force_at(points[i])), -o.kappa * normal[i].dot(force_jacobian[points[i].triangle] * normal[i]));
     }
+    for (std::size_t i = 1; i + 1 < n; ++i)
+      if (targets[i].allFinite()) move_along_segment(strip, flat, points[i], targets[i] * unit);
     result.iterations = iteration + 1;
-    // Convergence: the mean net displacement across the line over a window of iterations, so a
-    // point oscillating by a small amount does not keep the snake running.
-    const int span = iteration + 1 - window_start;
-    if (span >= window) {
-      double net = 0;
-      if (std::getenv("SNAKE_PERPOINT"))
-      for (std::size_t i = 1; i + 1 < n; ++i) {
-        const Eigen::Vector2d chord = points[i + 1].uv - points[i - 1].uv;
-        const Eigen::Vector2d d = points[i].uv - window_start_uv[i];
-        net += chord.norm() > 0 ? std::abs(cross2(chord, d)) / chord.norm() : d.norm();
-      }
-      else
-      for (std::size_t i = 1; i + 1 < n; ++i) {
-        double best = HUGE_VAL;
-        for (std::size_t j = 0; j + 1 < window_start_uv.size(); ++j)
-          best = std::min(best, (closest_on_segment(points[i].uv, window_start_uv[j], window_start_uv[j + 1]) - points[i].uv).squaredNorm());
-        net += std::sqrt(best);
-      }
-      result.last_displacement = net / (unit * double(m) * span);
-      if (std::getenv("SNAKE_TRACE")) std::fprintf(stderr, "it %d n %zu net %.2e\n", iteration, n, result.last_displacement);
-      if (std::getenv("SNAKE_DUMP") && iteration >= std::atoi(std::getenv("SNAKE_DUMP")) && iteration < std::atoi(std::getenv("SNAKE_DUMP")) + 20)
-        for (std::size_t i = 1; i + 1 < n; ++i) {
-          const Eigen::Vector2d chord = points[i + 1].uv - points[i - 1].uv;
-          double best = HUGE_VAL;
-          for (std::size_t j = 0; j + 1 < window_start_uv.size(); ++j)
-            best = std::min(best, (closest_on_segment(points[i].uv, window_start_uv[j], window_start_uv[j + 1]) - points[i].uv).norm());
-          const Eigen::Vector2d d = chord.normalized() * best;
-          const auto& tri = strip.triangles[points[i].triangle];
-          std::fprintf(stderr, "  p%2zu uv %8.3f %8.3f net %+.2e dist %.2e gap %.3f Fn %+.3f tri %u bary %.2f %.2f %.2f rings %d %d %d\n", i, points[i].uv.x()/unit, points[i].uv.y()/unit, cross2(chord.normalized(), d)/unit, best/unit,
-            (points[i].uv - points[i-1].uv).norm()/unit, o.kappa * cross2(chord.normalized(), force_at(points[i])), points[i].triangle, points[i].barycentric[0], points[i].barycentric[1], points[i].barycentric[2],
-            strip.ring[tri[0]], strip.ring[tri[1]], strip.ring[tri[2]]);
-        }
-      if (result.last_displacement < o.tolerance) {
+    if ((iteration + 1) % window == 0) {
+      const double change = mean_distance_to(points, window_start) / unit / double(window);
+      result.last_displacement = change;
+      if (change < o.tolerance) {
         result.converged = true;
         break;
       }
-      if (std::getenv("SNAKE_DAMP") && result.last_displacement > last_net) damping *= 0.5;
-      last_net = result.last_displacement;
-      window_start = iteration + 1;
-      window_start_uv.clear();
-      for (const auto& p : points) window_start_uv.push_back(p.uv);
+      if (change > last_change) damping *= 0.5;
+      last_change = change;
     }
-  }
-  if (std::getenv("SNAKE_UVTURN")) {
-    double tt = 0;
-    for (std::size_t i = 1; i + 1 < points.size(); ++i) { Eigen::Vector2d a = points[i].uv - points[i-1].uv, b = points[i+1].uv - points[i].uv; tt += std::abs(std::atan2(cross2(a, b), a.dot(b))); }
-    std::fprintf(stderr, "uvturn %.3f n %zu it %d conv %d\n", tt, points.size(), result.iterations, int(result.converged));
   }
   return result;
 }

@@ -31,21 +31,32 @@ std::optional<SnakeForce> parse_snake_force(const std::string& name);
 /// Distances are in units of the strip's mean edge length, curvature in units of the mesh's
 /// curvature scale, so the defaults work at any mesh size and resolution.
 struct SnakeOptions {
-  double alpha = 0.02;       ///< elasticity weight of Eq. (12) (first differences)
-  double beta = 8.0;         ///< rigidity weight of Eq. (12) (second differences)
-  double tau = 1.0;          ///< time step of the semi-implicit Euler step (I + tau A) v' = v + tau kappa F
+  double alpha = 0.02;  ///< elasticity weight of Eq. (12) (first differences)
+  double beta = 8.0;    ///< rigidity weight of Eq. (12) (second differences)
+  /// Time step of the semi-implicit Euler step (I + tau A) v' = v + tau kappa F. With
+  /// normal_step the force is linearised too, so large steps are stable and only change how
+  /// fast the line settles, not where (the paper's step, normal_step = false, used 1).
+  double tau = 16.0;
   double kappa = 0.1;        ///< weight of the feature force, F = grad |C|^p
   double exponent = 2.0;     ///< p: the paper's Eq. (15) uses |C|^2
   double curvature_cap = 4;  ///< |C| is clamped at this (in curvature-scale units) so spikes do not dominate
-  double max_step = 0.25;    ///< largest move of a point by the force in one iteration
+  /// Largest move of a point in one iteration. normal_step: a trust region on the solved move,
+  /// which does not change where the line settles; paper step: a cap on the force's step.
+  double max_step = 0.25;
   int max_iterations = 300;  ///< iteration cap
-  double tolerance = 2e-4;   ///< stop when the mean point displacement of an iteration falls below this
-  double spacing = 0.5;      ///< target distance between snake points
-  int resample_every = 5;    ///< iterations between insert/delete passes
+  /// Stop when the line's shape changes by less than this per iteration: the mean distance of
+  /// its points from the line as it was 2 * resample_every iterations earlier, divided by that
+  /// count. Sliding along the line, resampling and a point oscillating in place do not count.
+  double tolerance = 2e-4;
+  double spacing = 0.5;  ///< target distance between snake points
+  /// Iterations between resampling passes: points closer than spacing/2 are deleted, gaps over
+  /// 3 spacing/2 filled, and with normal_step the points are then spread evenly along the line.
+  int resample_every = 5;
   SnakeForce force = SnakeForce::smooth;
-  /// Keep only the force's component normal to the line. The tangential part only slides
-  /// points along the line, bunching them at curvature maxima (vertices) and making the
-  /// discrete line jagged; the paper applies the whole gradient (false).
+  /// paper step only: keep only the force's component normal to the line. The tangential part
+  /// only slides points along the line, bunching them at curvature maxima (vertices) and making
+  /// the discrete line jagged; the paper applies the whole gradient (false). The normal step
+  /// moves points along the normal only, so there the force's normal component is all that acts.
   bool normal_force_only = true;
   /// smooth force only: a vertex whose neighbours on both sides of the line have at most
   /// (1 - sharp_crest_drop) of its |C|^p is a sharp crest (a crease); its gradient across the
@@ -53,6 +64,13 @@ struct SnakeOptions {
   double sharp_crest_drop = 0.5;
   /// +1: attract to ridges (H > 0) only, -1: valleys only, 0: |H| as in the paper.
   double feature_sign = 0;
+  /// true: every iteration solves Eq. (15) for moves along each point's normal only, with the
+  /// smooth force linearised (its restoring stiffness on the left-hand side), and the points are
+  /// kept evenly spaced by the resampling passes. Sliding along the line changes nothing about
+  /// the line, and in the paper's step it never settles: the bending term keeps drawing points
+  /// into bends while resampling deletes them there. false: the paper's Eq. (15) on both
+  /// coordinates, explicit in the force.
+  bool normal_step = true;
 };
 
 /// A point on the strip, hence on the surface.
@@ -65,7 +83,9 @@ struct StripPoint {
 struct SnakeResult {
   std::vector<StripPoint> points;  ///< first and last are the pinned ends
   int iterations = 0;
-  double last_displacement = 0;  ///< mean point displacement of the last iteration (edge lengths)
+  /// Shape change per iteration over the last convergence window (edge lengths; see
+  /// SnakeOptions::tolerance).
+  double last_displacement = 0;
   bool converged = false;
 };
 

@@ -44,4 +44,41 @@ bool is_edge_path(const PreparedMesh& mesh, const std::vector<std::uint32_t>& pa
   return true;
 }
 
+// Height of the mesh surface above (x, y), or NaN outside it.
+double surface_height(const RawMesh& mesh, double x, double y) {
+  for (const auto& t : mesh.triangles) {
+    const auto &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+    if (x < std::min({a[0], b[0], c[0]}) || x > std::max({a[0], b[0], c[0]}) || y < std::min({a[1], b[1], c[1]}) ||
+        y > std::max({a[1], b[1], c[1]}))
+      continue;
+    const double det = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
+    const double l1 = ((x - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (y - a[1])) / det;
+    const double l2 = ((b[0] - a[0]) * (y - a[1]) - (x - a[0]) * (b[1] - a[1])) / det;
+    if (l1 >= -1e-12 && l2 >= -1e-12 && l1 + l2 <= 1 + 1e-12) return a[2] + l1 * (b[2] - a[2]) + l2 * (c[2] - a[2]);
+  }
+  return std::nan("");
+}
+
+// The analytic crest between x0 and x1, `count` points evenly spaced along it, laid on the mesh.
+std::vector<Eigen::Vector3d> crest_on_surface(const HeightField& field, double x0, double x1, std::size_t count) {
+  const int fine = 4000;
+  std::vector<double> xs(fine + 1), arc(fine + 1, 0.0);
+  for (int k = 0; k <= fine; ++k) {
+    xs[std::size_t(k)] = x0 + (x1 - x0) * k / fine;
+    if (k > 0)
+      arc[std::size_t(k)] = arc[std::size_t(k - 1)] + std::hypot(xs[std::size_t(k)] - xs[std::size_t(k - 1)],
+                                                                 field.crest(xs[std::size_t(k)]) - field.crest(xs[std::size_t(k - 1)]));
+  }
+  std::vector<Eigen::Vector3d> out;
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const double at = arc.back() * double(i) / double(std::max<std::size_t>(count - 1, 1));
+    while (k + 1 < std::size_t(fine) && arc[k + 1] < at) ++k;
+    const double f = arc[k + 1] > arc[k] ? (at - arc[k]) / (arc[k + 1] - arc[k]) : 0.0;
+    const double x = xs[k] + f * (xs[k + 1] - xs[k]), y = field.crest(x);
+    out.emplace_back(x, y, surface_height(field.mesh, x, y));
+  }
+  return out;
+}
+
 }  // namespace featureline::testing

@@ -26,4 +26,11 @@ std::vector<Eigen::Vector3d> refined_positions(const FeatureLineResult& result);
 /// True when consecutive vertices of `path` are mesh neighbours.
 bool is_edge_path(const PreparedMesh& mesh, const std::vector<std::uint32_t>& path);
 
+/// Height of the mesh surface above (x, y) (NaN outside the mesh), by locating the triangle.
+double surface_height(const RawMesh& mesh, double x, double y);
+
+/// The field's analytic crest between x0 and x1 as `count` points evenly spaced along it and
+/// laid on the faceted surface: what a line exactly on the crest looks like on this mesh.
+std::vector<Eigen::Vector3d> crest_on_surface(const HeightField& field, double x0, double x1, std::size_t count);
+
 }  // namespace featureline::testing
