@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The main job: set up, build, show the CLI on the bundled sample, then serve it over HTTP
-# (Ctrl-C stops the server).
+# The main job: set up, build, show the CLI on the bundled sample, then serve it over HTTP with
+# the browser page at / (Ctrl-C stops the server).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
@@ -13,7 +13,7 @@ echo "== featureline detect $sample --keys $keys"
           refined: {points: (.refined.points|length), length: .refined.length}, timings_ms: .stats.timings_ms}'
 echo "== featureline-server with $sample preloaded"
 port=${PORT:-8080}
-"$build/server/featureline-server" --port "$port" --preload "$sample" | while IFS= read -r line; do
+"$build/server/featureline-server" --port "$port" --preload "$sample" --web-root web/dist | while IFS= read -r line; do
   echo "$line"
   case "$line" in
     "preloaded "*)

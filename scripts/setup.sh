@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 
 packages=(g++ cmake ninja-build pkg-config git ca-certificates
   libopenmesh-dev libeigen3-dev libcpp-httplib-dev nlohmann-json3-dev libtinygltf-dev libdraco-dev
-  libgtest-dev jq curl)
+  libgtest-dev jq curl chromium)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -43,3 +43,4 @@ fi
 build=${BUILD_DIR:-build}
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
 cmake --build "$build" -j "$(nproc)"
+node web/build.mjs web/dist >/dev/null  # the browser page the server serves at /

@@ -1,0 +1,146 @@
+// The HTTP API (api/openapi.yaml), as the page uses it. Every error the server sends has the
+// body {"error": {"code", "message"}}; it becomes an ApiError carrying status, code and the
+// server's own message.
+
+// The API's origin: the page's own (the server serves the page), or ?api=http://host:port
+// while developing the page elsewhere (the server then needs --cors-origin).
+export const API_BASE = (() => {
+  const api = new URLSearchParams(globalThis.location?.search ?? '').get('api');
+  return api ? api.replace(/\/+$/, '') : '';
+})();
+
+export class ApiError extends Error {
+  constructor(status, code, message) {
+    super(message);
+    this.name = 'ApiError';
+    this.status = status;
+    this.code = code;
+  }
+  toString() {
+    return this.status ? `${this.message} (HTTP ${this.status}${this.code ? ` ${this.code}` : ''})` : this.message;
+  }
+}
+
+// An ApiError from a non-2xx answer's text: the server's JSON message when there is one.
+function errorFromText(status, statusText, text) {
+  try {
+    const body = JSON.parse(text);
+    if (body && body.error && typeof body.error.message === 'string')
+      return new ApiError(status, body.error.code || '', body.error.message);
+  } catch {
+    // not JSON: fall through
+  }
+  const snippet = (text || '').trim().slice(0, 200);
+  return new ApiError(status, '', snippet || statusText || `HTTP ${status}`);
+}
+
+async function errorFromResponse(response) {
+  let text = '';
+  try {
+    text = await response.text();
+  } catch {
+    // ignore: the status alone is reported
+  }
+  return errorFromText(response.status, response.statusText, text);
+}
+
+async function request(path, init) {
+  let response;
+  try {
+    response = await fetch(API_BASE + path, init);
+  } catch (e) {
+    if (e.name === 'AbortError') throw e;
+    throw new ApiError(0, 'network', `the server did not answer (${e.message})`);
+  }
+  if (!response.ok) throw await errorFromResponse(response);
+  return response;
+}
+
+export const MESH_FORMATS = ['obj', 'off', 'ply', 'stl', 'glb', 'gltf', 'drc'];
+
+export function formatOfFileName(name) {
+  const ext = (name.split('.').pop() || '').toLowerCase();
+  return MESH_FORMATS.includes(ext) ? ext : null;
+}
+
+// POST /v1/meshes with the file's raw bytes, with upload progress (XMLHttpRequest, since
+// fetch has no upload progress). Resolves to the MeshDescription.
+export function uploadMesh(body, { format, onProgress } = {}) {
+  return new Promise((resolve, reject) => {
+    const xhr = new XMLHttpRequest();
+    const query = format ? `?format=${encodeURIComponent(format)}` : '';
+    xhr.open('POST', `${API_BASE}/v1/meshes${query}`);
+    xhr.setRequestHeader('Content-Type', 'application/octet-stream');
+    xhr.responseType = 'text';
+    if (onProgress) {
+      xhr.upload.onprogress = (e) => onProgress({ loaded: e.loaded, total: e.lengthComputable ? e.total : 0, phase: 'upload' });
+      xhr.upload.onload = () => onProgress({ loaded: 1, total: 1, phase: 'prepare' });
+    }
+    xhr.onload = () => {
+      if (xhr.status === 201 || xhr.status === 200) {
+        try {
+          resolve(JSON.parse(xhr.responseText));
+        } catch {
+          reject(new ApiError(xhr.status, '', 'the server answered the upload with something that is not JSON'));
+        }
+      } else {
+        reject(errorFromText(xhr.status, xhr.statusText, xhr.responseText));
+      }
+    };
+    xhr.onerror = () => reject(new ApiError(0, 'network', 'the upload failed: the server did not answer or closed the connection'));
+    xhr.onabort = () => reject(new ApiError(0, 'aborted', 'the upload was cancelled'));
+    xhr.send(body);
+  });
+}
+
+export async function describeMesh(meshId) {
+  return (await request(`/v1/meshes/${meshId}`)).json();
+}
+
+export async function meshGlb(meshId) {
+  return (await request(`/v1/meshes/${meshId}/mesh.glb`, { headers: { Accept: 'model/gltf-binary' } })).arrayBuffer();
+}
+
+// Signed mean curvature per vertex, little-endian float32.
+export async function curvature(meshId) {
+  const bytes = await (await request(`/v1/meshes/${meshId}/curvature`, { headers: { Accept: 'application/octet-stream' } })).arrayBuffer();
+  const n = bytes.byteLength >>> 2;
+  const out = new Float32Array(n);
+  const view = new DataView(bytes);
+  for (let i = 0; i < n; ++i) out[i] = view.getFloat32(4 * i, true);
+  return out;
+}
+
+function postJson(path, body, { accept = 'application/json', signal } = {}) {
+  return request(path, {
+    method: 'POST',
+    headers: { 'Content-Type': 'application/json', Accept: accept },
+    body: JSON.stringify(body),
+    signal,
+  });
+}
+
+// One LineRequest -> one FeatureLine; {"lines": [...]} -> {"lines": [...]}.
+export async function detectFeatureLines(meshId, body, { signal } = {}) {
+  return (await postJson(`/v1/meshes/${meshId}/feature-lines`, body, { signal })).json();
+}
+
+export async function featureLinesGlb(meshId, body) {
+  return (await postJson(`/v1/meshes/${meshId}/feature-lines?format=glb`, body, { accept: 'model/gltf-binary' })).blob();
+}
+
+// POST /v1/meshes/{id}/segmentation {"lines": [LineRequest...], "mode"} ->
+// {"labels": [per face], "segments": [{label, faces, area, boundary_length}], "warnings": []}.
+export async function segmentation(meshId, body) {
+  return (await postJson(`/v1/meshes/${meshId}/segmentation`, body)).json();
+}
+
+// The segmented mesh as GLB (one primitive per segment). Resolves to a Blob, or rejects
+// when the server has no GLB answer for segmentation.
+export async function segmentationGlb(meshId, body) {
+  const response = await postJson(`/v1/meshes/${meshId}/segmentation?format=glb`, body, { accept: 'model/gltf-binary' });
+  const type = (response.headers.get('Content-Type') || '').toLowerCase();
+  if (!type.startsWith('model/gltf-binary'))
+    throw new ApiError(response.status, 'no_glb', 'this server does not answer the segmented mesh as GLB');
+  return response.blob();
+}

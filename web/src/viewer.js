@@ -1,0 +1,453 @@
+// The 3D view: the server's indexed mesh, lit and shaded, with per-vertex or per-face
+// colours, key markers, and the initial and refined lines. Rendering is on demand.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { Line2 } from 'three/addons/lines/Line2.js';
+import { LineMaterial } from 'three/addons/lines/LineMaterial.js';
+import { LineGeometry } from 'three/addons/lines/LineGeometry.js';
+
+// sRGB hex colours (the CSS legend uses the same ones).
+export const COLORS = {
+  initial: 0xff8c1a,
+  refined: 0x00d0ff,
+  surface: 0xc9ccd2,
+  key: 0xffe14d,
+  firstKey: 0x5cff8a,
+  otherKey: 0xc58cff,
+  hoverKey: 0xffffff,
+};
+const KEY_PIXELS = 7; // key marker radius on screen
+
+export function parseGlb(arrayBuffer) {
+  return new Promise((resolve, reject) => {
+    new GLTFLoader().parse(arrayBuffer, '', resolve, (e) => reject(new Error(`the GLB could not be read: ${e?.message ?? e}`)));
+  });
+}
+
+// The first triangle mesh of a parsed glTF as flat arrays (transforms applied). The server's
+// mesh.glb is indexed in the session's vertex order, so vertex i here is the server's vertex i.
+export function indexedMeshFromGltf(gltf) {
+  let found = null;
+  gltf.scene.updateMatrixWorld(true);
+  gltf.scene.traverse((o) => {
+    if (!found && o.isMesh && o.geometry?.attributes?.position) found = o;
+  });
+  if (!found) throw new Error('the GLB holds no triangle mesh');
+  const g = found.geometry.clone();
+  g.applyMatrix4(found.matrixWorld);
+  const positions = new Float32Array(g.attributes.position.array);
+  const n = g.attributes.position.count;
+  let index;
+  if (g.index) index = Uint32Array.from(g.index.array);
+  else index = Uint32Array.from({ length: n }, (_, i) => i);
+  if (!g.attributes.normal) g.computeVertexNormals();
+  const normals = new Float32Array(g.attributes.normal.array);
+  g.dispose();
+  return { positions, normals, index, vertexCount: n, faceCount: index.length / 3 };
+}
+
+export class Viewer {
+  constructor(host) {
+    this.host = host;
+    this.renderer = new THREE.WebGLRenderer({ antialias: true });
+    this.renderer.setPixelRatio(Math.min(2, window.devicePixelRatio || 1));
+    this.renderer.setClearColor(0x20242c, 1);
+    host.appendChild(this.renderer.domElement);
+    this.canvas = this.renderer.domElement;
+
+    this.scene = new THREE.Scene();
+    this.camera = new THREE.PerspectiveCamera(40, 1, 0.01, 100);
+    this.scene.add(this.camera);
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x404858, 0.9));
+    const headlight = new THREE.DirectionalLight(0xffffff, 2.2);
+    headlight.position.set(-0.6, 0.9, 0.5); // relative to the camera: from the viewer's upper left
+    this.camera.add(headlight);
+
+    this.controls = new OrbitControls(this.camera, this.canvas);
+    this.controls.enableDamping = false;
+    this.controls.addEventListener('change', () => this.requestRender());
+
+    this.meshGroup = new THREE.Group();
+    this.segmentGroup = new THREE.Group();
+    this.lineGroup = new THREE.Group();
+    this.keyGroup = new THREE.Group();
+    this.scene.add(this.meshGroup, this.segmentGroup, this.lineGroup, this.keyGroup);
+
+    this.raycaster = new THREE.Raycaster();
+    this.mesh = null; // the indexed data {positions, normals, index, ...}
+    this.displayMesh = null; // un-indexed copy (per-corner colours), same triangle order
+    this.keyMarkerGeometry = new THREE.SphereGeometry(1, 16, 12);
+    this.hoverKey = null;
+    this.renderPending = false;
+    this.frames = 0;
+
+    new ResizeObserver(() => this.resize()).observe(host);
+    this.resize();
+  }
+
+  resize() {
+    const w = Math.max(1, this.host.clientWidth);
+    const h = Math.max(1, this.host.clientHeight);
+    this.renderer.setSize(w, h, false);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    this.render();
+  }
+
+  requestRender() {
+    if (this.renderPending) return;
+    this.renderPending = true;
+    requestAnimationFrame(() => {
+      this.renderPending = false;
+      this.render();
+    });
+  }
+
+  render() {
+    this.scaleKeyMarkers();
+    this.renderer.render(this.scene, this.camera);
+    this.frames++;
+  }
+
+  // ---- the mesh -----------------------------------------------------------------------
+  setMesh(mesh) {
+    this.clearGroup(this.meshGroup);
+    this.clearGroup(this.segmentGroup);
+    this.clearGroup(this.lineGroup);
+    this.clearGroup(this.keyGroup);
+    this.mesh = mesh;
+    const { positions, normals, index, faceCount } = mesh;
+    const pos = new Float32Array(faceCount * 9);
+    const nor = new Float32Array(faceCount * 9);
+    for (let c = 0; c < faceCount * 3; ++c) {
+      const v = index[c];
+      for (let k = 0; k < 3; ++k) {
+        pos[3 * c + k] = positions[3 * v + k];
+        nor[3 * c + k] = normals[3 * v + k];
+      }
+    }
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+    geometry.setAttribute('normal', new THREE.BufferAttribute(nor, 3));
+    geometry.setAttribute('color', new THREE.BufferAttribute(new Float32Array(faceCount * 9), 3));
+    geometry.computeBoundingBox();
+    geometry.computeBoundingSphere();
+    const material = new THREE.MeshStandardMaterial({
+      vertexColors: true,
+      roughness: 0.8,
+      metalness: 0,
+      side: THREE.DoubleSide,
+      // Pushed back a little in depth, so lines lying on the surface are never hidden by it.
+      polygonOffset: true,
+      polygonOffsetFactor: 1,
+      polygonOffsetUnits: 2,
+    });
+    this.displayMesh = new THREE.Mesh(geometry, material);
+    this.displayMesh.name = 'mesh';
+    this.meshGroup.add(this.displayMesh);
+    this.setPlainColors();
+    this.fitView();
+  }
+
+  fitView() {
+    if (!this.displayMesh) return;
+    const box = this.displayMesh.geometry.boundingBox;
+    const size = box.getSize(new THREE.Vector3());
+    const center = box.getCenter(new THREE.Vector3());
+    const radius = Math.max(1e-9, this.displayMesh.geometry.boundingSphere.radius);
+    this.radius = radius;
+    // Z up when the mesh is thinnest along z (a height field, a CAD part lying flat), else Y up.
+    const zUp = size.z <= size.y && size.z <= size.x;
+    this.camera.up.set(0, zUp ? 0 : 1, zUp ? 1 : 0);
+    const dir = zUp ? new THREE.Vector3(0.25, -1.0, 0.95) : new THREE.Vector3(0.45, 0.55, 1.0);
+    dir.normalize();
+    const distance = radius / Math.sin(THREE.MathUtils.degToRad(this.camera.fov / 2)) * 0.95;
+    this.camera.position.copy(center).addScaledVector(dir, distance);
+    this.camera.near = distance / 100;
+    this.camera.far = distance * 20;
+    this.camera.updateProjectionMatrix();
+    this.controls.target.copy(center);
+    this.controls.update();
+    this.requestRender();
+  }
+
+  get faceCount() {
+    return this.mesh ? this.mesh.faceCount : 0;
+  }
+
+  // Colours are sRGB triples; they are stored linear, as three.js expects.
+  colorAttribute() {
+    return this.displayMesh.geometry.attributes.color;
+  }
+
+  setPlainColors() {
+    if (!this.displayMesh) return;
+    const c = new THREE.Color(COLORS.surface); // hex is sRGB; c holds linear components
+    const attr = this.colorAttribute();
+    for (let i = 0; i < attr.array.length; i += 3) {
+      attr.array[i] = c.r;
+      attr.array[i + 1] = c.g;
+      attr.array[i + 2] = c.b;
+    }
+    attr.needsUpdate = true;
+    this.showSegmentScene(false);
+  }
+
+  // rgbOfVertex(v) -> sRGB triple.
+  setVertexColors(rgbOfVertex) {
+    if (!this.displayMesh) return;
+    const { vertexCount, index } = this.mesh;
+    const linear = new Float32Array(vertexCount * 3);
+    const c = new THREE.Color();
+    for (let v = 0; v < vertexCount; ++v) {
+      const [r, g, b] = rgbOfVertex(v);
+      c.setRGB(r, g, b, THREE.SRGBColorSpace);
+      linear[3 * v] = c.r;
+      linear[3 * v + 1] = c.g;
+      linear[3 * v + 2] = c.b;
+    }
+    const attr = this.colorAttribute();
+    const a = attr.array;
+    for (let corner = 0; corner < index.length; ++corner) {
+      const v = index[corner];
+      a[3 * corner] = linear[3 * v];
+      a[3 * corner + 1] = linear[3 * v + 1];
+      a[3 * corner + 2] = linear[3 * v + 2];
+    }
+    attr.needsUpdate = true;
+    this.showSegmentScene(false);
+  }
+
+  // rgbOfFace(f) -> sRGB triple (flat colour per face; the display copy is un-indexed).
+  setFaceColors(rgbOfFace) {
+    if (!this.displayMesh) return;
+    const attr = this.colorAttribute();
+    const a = attr.array;
+    const c = new THREE.Color();
+    for (let f = 0; f < this.mesh.faceCount; ++f) {
+      const [r, g, b] = rgbOfFace(f);
+      c.setRGB(r, g, b, THREE.SRGBColorSpace);
+      for (let k = 0; k < 3; ++k) {
+        a[9 * f + 3 * k] = c.r;
+        a[9 * f + 3 * k + 1] = c.g;
+        a[9 * f + 3 * k + 2] = c.b;
+      }
+    }
+    attr.needsUpdate = true;
+    this.showSegmentScene(false);
+  }
+
+  // A separate segmented surface (remesh mode: the server's own GLB), shown instead of the
+  // mesh; picking still uses the mesh.
+  setSegmentScene(gltf) {
+    this.clearGroup(this.segmentGroup);
+    if (!gltf) return;
+    gltf.scene.traverse((o) => {
+      if (o.isMesh) {
+        const materials = Array.isArray(o.material) ? o.material : [o.material];
+        for (const m of materials) {
+          m.side = THREE.DoubleSide;
+          m.polygonOffset = true;
+          m.polygonOffsetFactor = 1;
+          m.polygonOffsetUnits = 2;
+        }
+      }
+    });
+    this.segmentGroup.add(gltf.scene);
+  }
+
+  showSegmentScene(on) {
+    const has = this.segmentGroup.children.length > 0;
+    this.segmentGroup.visible = on && has;
+    this.meshGroup.visible = !(on && has);
+    this.requestRender();
+  }
+
+  // ---- picking ------------------------------------------------------------------------
+  ndc(clientX, clientY) {
+    const r = this.canvas.getBoundingClientRect();
+    return new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
+  }
+
+  // The mesh vertex under the pointer: the corner of the hit triangle nearest to the hit.
+  pickVertex(clientX, clientY) {
+    if (!this.displayMesh) return null;
+    this.raycaster.setFromCamera(this.ndc(clientX, clientY), this.camera);
+    const hits = this.raycaster.intersectObject(this.displayMesh, false);
+    if (hits.length === 0) return null;
+    const hit = hits[0];
+    const f = hit.faceIndex;
+    const { index, positions } = this.mesh;
+    let best = -1;
+    let bestD = Infinity;
+    for (let k = 0; k < 3; ++k) {
+      const v = index[3 * f + k];
+      const dx = positions[3 * v] - hit.point.x;
+      const dy = positions[3 * v + 1] - hit.point.y;
+      const dz = positions[3 * v + 2] - hit.point.z;
+      const d = dx * dx + dy * dy + dz * dz;
+      if (d < bestD) (bestD = d), (best = v);
+    }
+    return { vertex: best, face: f, point: hit.point.toArray() };
+  }
+
+  vertexPosition(v) {
+    const p = this.mesh.positions;
+    return new THREE.Vector3(p[3 * v], p[3 * v + 1], p[3 * v + 2]);
+  }
+
+  // Client (CSS pixel) coordinates of a world point.
+  toClient(point) {
+    const r = this.canvas.getBoundingClientRect();
+    const p = point.clone().project(this.camera);
+    return { x: r.left + ((p.x + 1) / 2) * r.width, y: r.top + ((1 - p.y) / 2) * r.height, inFront: p.z < 1 && p.z > -1 };
+  }
+
+  // The key marker nearest to the pointer within a few pixels: {lineId, keyIndex}; keys of
+  // the active line win over others.
+  pickKey(clientX, clientY, radiusPx = KEY_PIXELS + 5) {
+    let best = null;
+    let bestScore = Infinity;
+    for (const marker of this.keyGroup.children) {
+      const s = this.toClient(marker.position);
+      if (!s.inFront) continue;
+      const d = Math.hypot(s.x - clientX, s.y - clientY);
+      if (d > radiusPx) continue;
+      const score = d - (marker.userData.active ? 1000 : 0);
+      if (score < bestScore) {
+        bestScore = score;
+        best = { lineId: marker.userData.lineId, keyIndex: marker.userData.keyIndex };
+      }
+    }
+    return best;
+  }
+
+  // ---- lines and keys -------------------------------------------------------------------
+  clearGroup(group) {
+    for (const child of [...group.children]) {
+      group.remove(child);
+      child.traverse((o) => {
+        if (o.geometry && o.geometry !== this.keyMarkerGeometry) o.geometry.dispose();
+        if (o.material) (Array.isArray(o.material) ? o.material : [o.material]).forEach((m) => m.dispose());
+      });
+    }
+  }
+
+  makeLine(points, closed, color, width, { active, kind, lineId }) {
+    const flat = [];
+    for (const p of points) flat.push(p[0], p[1], p[2]);
+    if (closed && points.length > 2) {
+      const a = points[0];
+      const b = points[points.length - 1];
+      if (a[0] !== b[0] || a[1] !== b[1] || a[2] !== b[2]) flat.push(a[0], a[1], a[2]);
+    }
+    const objects = [];
+    // Drawn twice: faintly on top of everything (so a line behind a fold still shows), and
+    // fully where it is visible.
+    for (const ghost of [true, false]) {
+      const geometry = new LineGeometry();
+      geometry.setPositions(flat);
+      const material = new LineMaterial({
+        color,
+        linewidth: ghost ? width * 0.75 : width,
+        worldUnits: false,
+        transparent: ghost || !active,
+        opacity: ghost ? (active ? 0.35 : 0.2) : active ? 1 : 0.6,
+        depthTest: !ghost,
+        depthWrite: !ghost,
+      });
+      const line = new Line2(geometry, material);
+      line.computeLineDistances();
+      line.renderOrder = ghost ? 1 : 2;
+      line.userData = { kind, ghost, lineId, active };
+      line.name = `${kind}-line`;
+      objects.push(line);
+    }
+    return objects;
+  }
+
+  // lines: [{id, keys, closed, result}], activeId: the active line's id.
+  setLines(lines, activeId) {
+    if (!this.mesh) return;
+    this.clearGroup(this.lineGroup);
+    this.clearGroup(this.keyGroup);
+    for (const line of lines) {
+      const active = line.id === activeId;
+      const r = line.result;
+      if (r && r.initial?.points?.length >= 2)
+        for (const o of this.makeLine(r.initial.points, r.closed, COLORS.initial, 2, { active, kind: 'initial', lineId: line.id }))
+          this.lineGroup.add(o);
+      if (r && r.refined?.points?.length >= 2)
+        for (const o of this.makeLine(r.refined.points, r.closed, COLORS.refined, 3.5, { active, kind: 'refined', lineId: line.id }))
+          this.lineGroup.add(o);
+      line.keys.forEach((v, i) => {
+        const hover = this.hoverKey && this.hoverKey.lineId === line.id && this.hoverKey.keyIndex === i;
+        const color = hover ? COLORS.hoverKey : !active ? COLORS.otherKey : i === 0 ? COLORS.firstKey : COLORS.key;
+        const marker = new THREE.Mesh(
+          this.keyMarkerGeometry,
+          new THREE.MeshBasicMaterial({ color, depthTest: false, transparent: true, opacity: active ? 1 : 0.85 }),
+        );
+        marker.position.copy(this.vertexPosition(v));
+        marker.renderOrder = 3;
+        marker.userData = { lineId: line.id, keyIndex: i, active, vertex: v };
+        marker.name = 'key';
+        this.keyGroup.add(marker);
+      });
+    }
+    this.requestRender();
+  }
+
+  // Key markers keep a constant size on screen.
+  scaleKeyMarkers() {
+    const h = this.canvas.clientHeight || 1;
+    const k = (2 * Math.tan(THREE.MathUtils.degToRad(this.camera.fov / 2))) / h;
+    for (const m of this.keyGroup.children) {
+      const distance = m.position.distanceTo(this.camera.position);
+      m.scale.setScalar(Math.max(1e-9, distance * k * KEY_PIXELS));
+    }
+  }
+
+  // ---- for tests ----------------------------------------------------------------------
+  sceneStats() {
+    const count = (pred) => {
+      let n = 0;
+      this.lineGroup.traverse((o) => {
+        if (o.isLine2 && pred(o.userData)) n++;
+      });
+      return n;
+    };
+    return {
+      frames: this.frames,
+      triangles: this.faceCount,
+      initialLines: count((u) => u.kind === 'initial' && !u.ghost),
+      refinedLines: count((u) => u.kind === 'refined' && !u.ghost),
+      lineObjects: this.lineGroup.children.length,
+      keyMarkers: this.keyGroup.children.length,
+      segmentSceneShown: this.segmentGroup.visible && this.segmentGroup.children.length > 0,
+    };
+  }
+
+  // Renders now and counts pixels of the line colours (and of the background) in the frame.
+  probe() {
+    this.render();
+    const gl = this.renderer.getContext();
+    const w = gl.drawingBufferWidth;
+    const h = gl.drawingBufferHeight;
+    const px = new Uint8Array(w * h * 4);
+    gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    const target = (hex) => [(hex >> 16) & 255, (hex >> 8) & 255, hex & 255];
+    const initial = target(COLORS.initial);
+    const refined = target(COLORS.refined);
+    const near = (i, t) => Math.abs(px[i] - t[0]) + Math.abs(px[i + 1] - t[1]) + Math.abs(px[i + 2] - t[2]) < 60;
+    let nInitial = 0;
+    let nRefined = 0;
+    let nBackground = 0;
+    for (let i = 0; i < px.length; i += 4) {
+      if (near(i, initial)) nInitial++;
+      else if (near(i, refined)) nRefined++;
+      else if (near(i, [0x20, 0x24, 0x2c])) nBackground++;
+    }
+    return { width: w, height: h, initial: nInitial, refined: nRefined, background: nBackground, total: w * h };
+  }
+}
