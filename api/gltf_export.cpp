@@ -2,6 +2,7 @@
 
 #include <tiny_gltf.h>
 
+#include <cmath>
 #include <cstring>
 #include <sstream>
 
@@ -147,7 +148,84 @@ std::string write(const tinygltf::Model& model, bool binary) {
   return out.str();
 }
 
+// Distinct, saturated colours for segment labels (golden-angle hue steps), linear RGB.
+std::array<double, 4> label_colour(int label) {
+  const double hue = std::fmod(0.61803398875 * label, 1.0) * 6.0;
+  const double x = 1 - std::abs(std::fmod(hue, 2.0) - 1);
+  std::array<double, 3> rgb{};
+  switch (int(hue)) {
+    case 0: rgb = {1, x, 0}; break;
+    case 1: rgb = {x, 1, 0}; break;
+    case 2: rgb = {0, 1, x}; break;
+    case 3: rgb = {0, x, 1}; break;
+    case 4: rgb = {x, 0, 1}; break;
+    default: rgb = {1, 0, x}; break;
+  }
+  return {0.15 + 0.75 * rgb[0], 0.15 + 0.75 * rgb[1], 0.15 + 0.75 * rgb[2], 1.0};
+}
+
 }  // namespace
+
+std::string labelled_mesh_to_glb(const std::vector<Eigen::Vector3d>& positions,
+                                 const std::vector<std::array<std::uint32_t, 3>>& triangles, const std::vector<int>& labels,
+                                 int label_count) {
+  if (labels.size() != triangles.size()) throw InvalidInputError("one label per triangle is needed");
+  tinygltf::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "featureline";
+  model.buffers.emplace_back();
+  const int position_accessor = add_positions(model, positions);
+  std::vector<Eigen::Vector3d> normals(positions.size(), Eigen::Vector3d::Zero());
+  for (const auto& t : triangles) {
+    const Eigen::Vector3d n = (positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]);
+    for (auto v : t) normals[v] += n;
+  }
+  std::vector<float> normal_data;
+  for (auto& n : normals) {
+    if (!(n.norm() > 0)) n = Eigen::Vector3d(0, 0, 1);
+    n.normalize();
+    for (int k = 0; k < 3; ++k) normal_data.push_back(float(n[k]));
+  }
+  const int normal_view = add_view(model, normal_data.data(), normal_data.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
+  const int normal_accessor =
+      add_accessor(model, normal_view, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, positions.size());
+  tinygltf::Mesh mesh;
+  mesh.name = "segments";
+  for (int label = 0; label < label_count; ++label) {
+    std::vector<std::uint32_t> indices;
+    for (std::size_t f = 0; f < triangles.size(); ++f)
+      if (labels[f] == label) indices.insert(indices.end(), triangles[f].begin(), triangles[f].end());
+    if (indices.empty()) continue;
+    tinygltf::Material material;
+    material.name = "segment_" + std::to_string(label);
+    const auto colour = label_colour(label);
+    material.pbrMetallicRoughness.baseColorFactor = {colour[0], colour[1], colour[2], colour[3]};
+    material.pbrMetallicRoughness.metallicFactor = 0.0;
+    material.pbrMetallicRoughness.roughnessFactor = 0.8;
+    material.doubleSided = true;
+    model.materials.push_back(material);
+    tinygltf::Primitive primitive;
+    primitive.mode = TINYGLTF_MODE_TRIANGLES;
+    primitive.attributes["POSITION"] = position_accessor;
+    primitive.attributes["NORMAL"] = normal_accessor;
+    const int view = add_view(model, indices.data(), indices.size() * sizeof(std::uint32_t), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    primitive.indices = add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, indices.size());
+    primitive.material = int(model.materials.size() - 1);
+    mesh.primitives.push_back(primitive);
+  }
+  if (mesh.primitives.empty()) throw InvalidInputError("nothing to write: no labelled triangle");
+  model.meshes.push_back(mesh);
+  tinygltf::Node node;
+  node.name = "segments";
+  node.mesh = 0;
+  model.nodes.push_back(node);
+  tinygltf::Scene scene;
+  scene.nodes.push_back(0);
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+  model.buffers[0].data.resize((model.buffers[0].data.size() + 3) / 4 * 4, 0);
+  return write(model, true);
+}
 
 std::string feature_line_to_glb(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& results, bool include_mesh) {
   return write(build_model(mesh, results, include_mesh), true);

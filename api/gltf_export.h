@@ -19,4 +19,10 @@ std::string feature_line_to_glb(const PreparedMesh& mesh, const std::vector<Feat
 std::string feature_line_to_gltf_json(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& results,
                                       bool include_mesh);
 
+/// A GLB of a labelled triangle mesh: one primitive per label, each with its own colour
+/// (a material per segment), sharing positions and normals.
+std::string labelled_mesh_to_glb(const std::vector<Eigen::Vector3d>& positions,
+                                 const std::vector<std::array<std::uint32_t, 3>>& triangles, const std::vector<int>& labels,
+                                 int label_count);
+
 }  // namespace featureline

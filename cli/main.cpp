@@ -9,9 +9,11 @@
 
 #include "api/feature_line_json.h"
 #include "api/gltf_export.h"
+#include "api/segmentation_json.h"
 #include "engine/errors.h"
 #include "engine/feature_line.h"
 #include "engine/mesh_io.h"
+#include "engine/segmentation.h"
 
 namespace {
 
@@ -20,7 +22,15 @@ using nlohmann::json;
 
 const char* const kUsage = R"(usage:
   featureline detect MESH --keys 10,20,30 [options]
+  featureline segment MESH --loop 1,2,3,4 [--loop 5,6,7] [--line 8,9] [--mode snap|remesh] [options]
   featureline info MESH [--smooth-curvature N]
+
+segment options:
+  --loop LIST             keys of a closed line (repeatable)
+  --line LIST             keys of an open line ending on the boundary or another line (repeatable)
+  --mode M                snap (default: cut along mesh edges) | remesh (cut along the smooth line)
+  --out FILE              parts.glb (one primitive per part) or labels.json
+  (the detect options below apply to every line)
 
 detect options:
   --keys LIST             comma-separated key vertex ids (0-based, file order)
@@ -81,7 +91,8 @@ bool ends_with(const std::string& s, const std::string& suffix) {
 int run(int argc, char** argv) {
   if (argc < 3) throw UsageError("expected a command and a mesh");
   const std::string command = argv[1];
-  if (command != "detect" && command != "info") throw UsageError("unknown command \"" + command + "\"");
+  if (command != "detect" && command != "info" && command != "segment")
+    throw UsageError("unknown command \"" + command + "\"");
   const std::string mesh_path = argv[2];
 
   json options = json::object();
@@ -89,6 +100,8 @@ int run(int argc, char** argv) {
   std::string keys_text, out_path;
   bool closed = false;
   int smoothing = 0;
+  std::vector<std::pair<std::string, bool>> segment_lines;  // keys, closed
+  std::string mode_text = "snap";
   for (int i = 3; i < argc; ++i) {
     const std::string flag = argv[i];
     auto value = [&]() -> std::string {
@@ -96,6 +109,9 @@ int run(int argc, char** argv) {
       return argv[++i];
     };
     if (flag == "--keys") keys_text = value();
+    else if (flag == "--loop") segment_lines.emplace_back(value(), true);
+    else if (flag == "--line") segment_lines.emplace_back(value(), false);
+    else if (flag == "--mode") mode_text = value();
     else if (flag == "--closed") closed = true;
     else if (flag == "--initial") options["initial"] = value();
     else if (flag == "--weights") {
@@ -143,6 +159,33 @@ int run(int argc, char** argv) {
 
   if (command == "info") {
     std::cout << featureline::mesh_info_to_json(*mesh, load_ms).dump(2) << "\n";
+    return 0;
+  }
+  if (command == "segment") {
+    if (segment_lines.empty()) throw UsageError("segment needs at least one --loop or --line");
+    const auto mode = featureline::parse_segmentation_mode(mode_text);
+    if (!mode) throw UsageError("--mode must be snap or remesh");
+    std::vector<featureline::FeatureLineResult> lines;
+    for (const auto& [keys, is_closed] : segment_lines) {
+      featureline::FeatureLineRequest request;
+      request.keys = featureline::parse_key_list(keys);
+      request.closed = is_closed;
+      featureline::apply_options_json(options, request.options);
+      lines.push_back(featureline::detect_feature_line(*mesh, request));
+    }
+    featureline::SegmentationOptions segmentation_options;
+    segmentation_options.mode = *mode;
+    const auto parts = featureline::segment_mesh(*mesh, lines, segmentation_options);
+    if (out_path.empty()) {
+      std::cout << featureline::segmentation_to_json(parts, *mode).dump(2) << "\n";
+      return 0;
+    }
+    std::ofstream out(out_path, std::ios::binary);
+    if (!out) throw std::runtime_error("cannot write " + out_path);
+    if (ends_with(out_path, ".glb")) out << featureline::segmentation_to_glb(*mesh, parts);
+    else if (ends_with(out_path, ".json")) out << featureline::segmentation_to_json(parts, *mode).dump(2) << "\n";
+    else throw UsageError("--out must end in .json or .glb");
+    if (!out) throw std::runtime_error("failed writing " + out_path);
     return 0;
   }
   if (keys_text.empty()) throw UsageError("detect needs --keys");

@@ -29,7 +29,10 @@ ErrorReply error_reply(std::exception_ptr error) {
   } catch (const GeometryError& e) {
     r = {422, "unprocessable_geometry", e.what(), {}};
   } catch (const nlohmann::json::exception& e) {
-    r = {400, "invalid_json", std::string("the request body is not valid JSON: ") + e.what(), {}};
+    // nlohmann prefixes its messages with "[json.exception.parse_error.101] "; keep the sentence.
+    std::string what = e.what();
+    if (const auto end = what.find("] "); !what.empty() && what[0] == '[' && end != std::string::npos) what.erase(0, end + 2);
+    r = {400, "invalid_json", "the request body is not valid JSON: " + what, {}};
   } catch (const std::bad_alloc&) {
     r = {413, "payload_too_large", "the request needs more memory than the server can give it", {}};
   } catch (...) {

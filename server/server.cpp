@@ -4,9 +4,11 @@
 // <resolv.h>, whose `_res` macro breaks Eigen's templates.
 #include "api/feature_line_json.h"
 #include "api/gltf_export.h"
+#include "api/segmentation_json.h"
 #include "engine/errors.h"
 #include "engine/feature_line.h"
 #include "engine/mesh_io.h"
+#include "engine/segmentation.h"
 
 #include <httplib.h>
 #include <nlohmann/json.hpp>
@@ -41,6 +43,17 @@ constexpr std::size_t kMaxJsonBytes = 4 << 20;
 // access log and the latency metrics.
 thread_local Clock::time_point request_start;
 thread_local const char* request_route = "unmatched";
+// False for a request the library refused before routing (unparseable request line or
+// headers): the pre-routing handler never ran, so request_start and request_route are stale.
+thread_local bool request_routed = false;
+
+// The method as a metrics label. An unparseable request carries whatever bytes the client sent
+// as its method; they must not reach the exposition text (quotes, control bytes) nor add series.
+const char* method_label(const std::string& method) {
+  for (const char* known : {"GET", "POST", "DELETE", "OPTIONS", "HEAD", "PUT", "PATCH"})
+    if (method == known) return known;
+  return "other";
+}
 
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
@@ -63,6 +76,21 @@ void write_error(httplib::Response& res, const ErrorReply& error) {
   res.status = error.status;
   for (const auto& [k, v] : error.headers) res.set_header(k, v);
   res.set_content(error.body(), "application/json");
+}
+
+// httplib 0.11 ignores a handler's "Connection: close": it keeps the connection open and parses
+// the unread rest of a refused upload as the next request (request smuggling, reproduced by
+// tests/integration/server_test.sh). A content provider that reports failure after writing the
+// whole body makes httplib close the connection once the response is out.
+void close_after_response(httplib::Response& res) {
+  auto body = std::make_shared<std::string>(std::move(res.body));
+  const std::string type = res.get_header_value("Content-Type");
+  res.body.clear();
+  res.headers.erase("Content-Type");
+  res.set_content_provider(body->size(), type, [body](std::size_t, std::size_t, httplib::DataSink& sink) {
+    sink.write(body->data(), body->size());
+    return false;  // ends the connection
+  });
 }
 
 void write_json(httplib::Response& res, int status, const json& body) {
@@ -126,11 +154,13 @@ struct FeaturelineServer::Impl {
     http.set_pre_routing_handler([](const httplib::Request&, httplib::Response&) {
       request_start = Clock::now();
       request_route = "unmatched";
+      request_routed = true;
       return httplib::Server::HandlerResponse::Unhandled;
     });
     // Errors the library produces itself (unknown route, oversized body) get our JSON shape.
     http.set_error_handler([](const httplib::Request&, httplib::Response& res) {
-      if (res.body.empty()) write_error(res, error_reply_for_status(res.status));
+      // (A body from a content provider, as close_after_response sets, is already ours.)
+      if (res.body.empty() && !res.has_header("Content-Type")) write_error(res, error_reply_for_status(res.status));
     });
     // Never let exception text reach a response header (EXCEPTION_WHAT).
     http.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr error) {
@@ -138,8 +168,10 @@ struct FeaturelineServer::Impl {
     });
     http.set_post_routing_handler([this](const httplib::Request& req, httplib::Response& res) { add_cors(req, res); });
     http.set_logger([this](const httplib::Request& req, const httplib::Response& res) {
-      const double seconds = std::chrono::duration<double>(Clock::now() - request_start).count();
-      metrics.record_request(request_route, req.method, res.status, seconds);
+      const bool routed = request_routed;
+      request_routed = false;
+      const double seconds = routed ? std::chrono::duration<double>(Clock::now() - request_start).count() : 0.0;
+      metrics.record_request(routed ? request_route : "unmatched", method_label(req.method), res.status, seconds);
       if (!options.access_log) return;
       char stamp[32];
       const std::time_t now = std::time(nullptr);
@@ -228,6 +260,7 @@ struct FeaturelineServer::Impl {
         upload(req, res, reader);
       } catch (...) {
         write_error(res, error_reply(std::current_exception()));
+        if (res.get_header_value("Connection") == "close") close_after_response(res);
       }
     });
     http.Get(mesh, guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
@@ -248,6 +281,9 @@ struct FeaturelineServer::Impl {
     }));
     http.Post(mesh + "/feature-lines", guarded("/v1/meshes/{id}/feature-lines", [this](const auto& req, auto& res) {
       feature_lines(req, res);
+    }));
+    http.Post(mesh + "/segmentation", guarded("/v1/meshes/{id}/segmentation", [this](const auto& req, auto& res) {
+      segmentation(req, res);
     }));
     http.Get("/healthz", guarded("/healthz", [this](const auto&, auto& res) {
       write_json(res, 200,
@@ -433,40 +469,11 @@ struct FeaturelineServer::Impl {
     return line;
   }
 
-  void feature_lines(const httplib::Request& req, httplib::Response& res) {
-    auto session = session_or_404(req.matches[1]);
-    // Answer format: ?format= wins over Accept.
-    std::string answer = "json";
-    if (req.has_param("format")) {
-      answer = req.get_param_value("format");
-      if (answer != "json" && answer != "glb" && answer != "gltf")
-        throw HttpError(400, "invalid_request", "format must be json, glb or gltf");
-    } else if (accepts(req, "model/gltf-binary")) {
-      answer = "glb";
-    } else if (accepts(req, "model/gltf+json")) {
-      answer = "gltf";
-    }
-    const std::string type = media_type(req.get_header_value("Content-Type"));
-    if (!type.empty() && type != "application/json")
-      throw HttpError(415, "unsupported_format",
-                      "send the request as application/json (curl: -H 'Content-Type: application/json'), not \"" + type + "\"");
-    if (req.body.size() > kMaxJsonBytes) throw HttpError(413, "payload_too_large", "the request body exceeds 4 MiB");
-    const json body = json::parse(req.body);
-    if (!body.is_object()) throw InvalidInputError("the request body must be a JSON object");
-    std::vector<FeatureLineRequest> lines;
-    const bool batch = body.contains("lines");
-    if (batch) {
-      if (body.size() != 1) throw InvalidInputError("with \"lines\", no other top-level field is allowed");
-      const json& list = body["lines"];
-      if (!list.is_array() || list.empty() || list.size() > kMaxLinesPerRequest)
-        throw InvalidInputError("\"lines\" must be an array of 1 to 64 line requests");
-      for (std::size_t i = 0; i < list.size(); ++i) lines.push_back(parse_line(list[i], *session->mesh, "lines[" + std::to_string(i) + "]"));
-    } else {
-      lines.push_back(parse_line(body, *session->mesh, "request"));
-    }
-    // Lines run in parallel on the pool; each job shares the immutable mesh.
+  // Lines run in parallel on the pool; each job shares the immutable mesh.
+  std::vector<FeatureLineResult> run_lines(const std::shared_ptr<const MeshSession>& session,
+                                           const std::vector<FeatureLineRequest>& lines) {
     std::vector<std::future<FeatureLineResult>> futures;
-    for (auto& line : lines) {
+    for (const auto& line : lines) {
       auto future = pool.try_submit([session, line] { return detect_feature_line(*session->mesh, line); });
       if (!future) {
         metrics.record_rejected("queue_full");
@@ -483,6 +490,76 @@ struct FeaturelineServer::Impl {
       }
       results.push_back(f.get());
     }
+    return results;
+  }
+
+  // The JSON body of a POST, checked for type and size.
+  json json_body(const httplib::Request& req) const {
+    const std::string type = media_type(req.get_header_value("Content-Type"));
+    if (!type.empty() && type != "application/json")
+      throw HttpError(415, "unsupported_format",
+                      "send the request as application/json (curl: -H 'Content-Type: application/json'), not \"" + type + "\"");
+    if (req.body.size() > kMaxJsonBytes) throw HttpError(413, "payload_too_large", "the request body exceeds 4 MiB");
+    json body = json::parse(req.body);
+    if (!body.is_object()) throw InvalidInputError("the request body must be a JSON object");
+    return body;
+  }
+
+  std::vector<FeatureLineRequest> parse_line_list(const json& list, const PreparedMesh& mesh) {
+    if (!list.is_array() || list.empty() || list.size() > kMaxLinesPerRequest)
+      throw InvalidInputError("\"lines\" must be an array of 1 to 64 line requests");
+    std::vector<FeatureLineRequest> lines;
+    for (std::size_t i = 0; i < list.size(); ++i) lines.push_back(parse_line(list[i], mesh, "lines[" + std::to_string(i) + "]"));
+    return lines;
+  }
+
+  void segmentation(const httplib::Request& req, httplib::Response& res) {
+    auto session = session_or_404(req.matches[1]);
+    const bool glb = req.has_param("format") ? req.get_param_value("format") == "glb" : accepts(req, "model/gltf-binary");
+    if (req.has_param("format") && !glb && req.get_param_value("format") != "json")
+      throw HttpError(400, "invalid_request", "format must be json or glb");
+    const json body = json_body(req);
+    SegmentationOptions options_;
+    for (auto it = body.begin(); it != body.end(); ++it)
+      if (it.key() != "lines" && it.key() != "mode") throw InvalidInputError("unknown field \"" + it.key() + "\"");
+    if (!body.contains("lines")) throw InvalidInputError("\"lines\" is required");
+    if (body.contains("mode")) {
+      const auto mode = body["mode"].is_string() ? parse_segmentation_mode(body["mode"].get<std::string>()) : std::nullopt;
+      if (!mode) throw InvalidInputError("\"mode\" must be \"snap\" or \"remesh\"");
+      options_.mode = *mode;
+    }
+    const auto lines = parse_line_list(body["lines"], *session->mesh);
+    const auto results = run_lines(session, lines);
+    const SegmentationResult segments = run_on_pool([session, results, options_] {
+      return segment_mesh(*session->mesh, results, options_);
+    });
+    if (glb) res.set_content(segmentation_to_glb(*session->mesh, segments), "model/gltf-binary");
+    else write_json(res, 200, segmentation_to_json(segments, options_.mode));
+  }
+
+  void feature_lines(const httplib::Request& req, httplib::Response& res) {
+    auto session = session_or_404(req.matches[1]);
+    // Answer format: ?format= wins over Accept.
+    std::string answer = "json";
+    if (req.has_param("format")) {
+      answer = req.get_param_value("format");
+      if (answer != "json" && answer != "glb" && answer != "gltf")
+        throw HttpError(400, "invalid_request", "format must be json, glb or gltf");
+    } else if (accepts(req, "model/gltf-binary")) {
+      answer = "glb";
+    } else if (accepts(req, "model/gltf+json")) {
+      answer = "gltf";
+    }
+    const json body = json_body(req);
+    std::vector<FeatureLineRequest> lines;
+    const bool batch = body.contains("lines");
+    if (batch) {
+      if (body.size() != 1) throw InvalidInputError("with \"lines\", no other top-level field is allowed");
+      lines = parse_line_list(body["lines"], *session->mesh);
+    } else {
+      lines.push_back(parse_line(body, *session->mesh, "request"));
+    }
+    const std::vector<FeatureLineResult> results = run_lines(session, lines);
     if (answer == "glb") {
       res.set_content(feature_line_to_glb(*session->mesh, results, false), "model/gltf-binary");
     } else if (answer == "gltf") {

@@ -50,4 +50,17 @@ check "misspelt JSON option named" [ "$(cat "$tmp/err")" = 'featureline: unknown
 
 "$FEATURELINE" detect "$mesh" --keys 1,x >"$tmp/out" 2>"$tmp/err"; rc=$?
 check "malformed keys exit 1" [ $rc = 1 ]
+sample="$(dirname "$0")/../../samples/ridge_field.off"
+"$FEATURELINE" segment "$sample" --line 820,860 >"$tmp/parts.json" 2>"$tmp/err"; rc=$?
+check "segment exits 0" [ $rc = 0 ]
+check "an open line from border to border makes two parts" [ "$(jq '.segments|length' "$tmp/parts.json")" = 2 ]
+check "every face is labelled" [ "$(jq '.labels|length' "$tmp/parts.json")" = 3200 ]
+check "part areas add up to the total" [ "$(jq '((.segments|map(.area)|add) - .total_area)|fabs < 1e-9' "$tmp/parts.json")" = true ]
+"$FEATURELINE" segment "$sample" --line 820,860 --mode remesh --out "$tmp/parts.glb"; rc=$?
+check "segment --out .glb writes a GLB" [ $rc = 0 ] && check "parts GLB magic" [ "$(head -c 4 "$tmp/parts.glb")" = glTF ]
+"$FEATURELINE" segment "$sample" --line 700,705 >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "a line that closes nothing exits 1" [ $rc = 1 ]
+check "and says so" grep -q "close no region" "$tmp/err"
+"$FEATURELINE" segment "$sample" --loop 700,705,750 --mode sideways >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "unknown --mode exits 2" [ $rc = 2 ]
 exit $fail

@@ -1,0 +1,489 @@
+// Mesh decomposition along feature lines (the paper's application, Figs. 8 and 12): snap and
+// remesh modes against the capsule's exact areas, validity of the remeshed parts, open lines.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <set>
+#include <unordered_map>
+
+#include "engine/errors.h"
+#include "engine/feature_line.h"
+#include "engine/segmentation.h"
+#include "tests/support/synthetic_meshes.h"
+
+namespace featureline {
+namespace {
+
+using namespace featureline::testing;
+
+FeatureLineResult line_through(const PreparedMesh& mesh, std::vector<std::uint32_t> keys, bool closed) {
+  FeatureLineRequest request;
+  request.keys = std::move(keys);
+  request.closed = closed;
+  return detect_feature_line(mesh, request);
+}
+
+FeatureLineResult line_of(std::vector<SurfacePoint> points, bool closed) {
+  FeatureLineResult line;
+  line.closed = closed;
+  line.refined = std::move(points);
+  return line;
+}
+
+// The loop where the plane normal . x = offset meets the mesh: one point where it crosses each
+// edge, one in the middle of each face between (so faces are entered and left through edges
+// and split in their interior). Exact on the faceted surface. Assumes a single loop and no
+// vertex on the plane.
+std::vector<SurfacePoint> plane_loop(const PreparedMesh& mesh, const Eigen::Vector3d& normal, double offset) {
+  const auto& tris = mesh.triangles;
+  std::vector<double> s(mesh.n_vertices());
+  for (std::size_t v = 0; v < s.size(); ++v) s[v] = normal.dot(mesh.positions[v]) - offset;
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> faces_of;
+  for (std::uint32_t f = 0; f < tris.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      auto a = tris[f][k], b = tris[f][(k + 1) % 3];
+      faces_of[{std::min(a, b), std::max(a, b)}].push_back(f);
+    }
+  auto crossed = [&](std::uint32_t f) {
+    std::vector<int> edges;
+    for (int k = 0; k < 3; ++k)
+      if (s[tris[f][k]] * s[tris[f][(k + 1) % 3]] < 0) edges.push_back(k);
+    return edges;
+  };
+  auto crossing = [&](std::uint32_t f, int k) {
+    SurfacePoint p;
+    const auto a = tris[f][k], b = tris[f][(k + 1) % 3];
+    const double t = s[a] / (s[a] - s[b]);
+    p.face = f;
+    p.barycentric = {0, 0, 0};
+    p.barycentric[k] = 1 - t;
+    p.barycentric[(k + 1) % 3] = t;
+    p.position = (1 - t) * mesh.positions[a] + t * mesh.positions[b];
+    return p;
+  };
+  std::uint32_t start = 0;
+  while (crossed(start).size() != 2) ++start;
+  std::vector<SurfacePoint> loop;
+  std::uint32_t f = start;
+  int entry = crossed(start)[0];
+  do {
+    const auto edges = crossed(f);
+    const int exit = edges[0] == entry ? edges[1] : edges[0];
+    const SurfacePoint in = crossing(f, entry), out = crossing(f, exit);
+    SurfacePoint mid = in;
+    for (int k = 0; k < 3; ++k) mid.barycentric[k] = 0.5 * (in.barycentric[k] + out.barycentric[k]);
+    mid.position = 0.5 * (in.position + out.position);
+    loop.push_back(in);
+    loop.push_back(mid);
+    const auto a = tris[f][exit], b = tris[f][(exit + 1) % 3];
+    const auto& pair = faces_of[{std::min(a, b), std::max(a, b)}];
+    const std::uint32_t g = pair[0] == f ? pair[1] : pair[0];
+    entry = -1;
+    for (int k = 0; k < 3; ++k)
+      if ((tris[g][k] == a && tris[g][(k + 1) % 3] == b) || (tris[g][k] == b && tris[g][(k + 1) % 3] == a)) entry = k;
+    f = g;
+  } while (f != start);
+  return loop;
+}
+
+double mesh_area(const std::vector<Eigen::Vector3d>& p, const std::vector<std::array<std::uint32_t, 3>>& t) {
+  double area = 0;
+  for (const auto& tri : t) area += 0.5 * (p[tri[1]] - p[tri[0]]).cross(p[tri[2]] - p[tri[0]]).norm();
+  return area;
+}
+
+// Topology of one part: every directed edge at most once (consistent orientation, manifold
+// edges), each boundary vertex with one outgoing boundary edge (manifold vertices), the number
+// of boundary loops and the Euler characteristic.
+struct PartTopology {
+  bool consistent = true;
+  int boundary_loops = 0;
+  long euler = 0;
+  std::vector<std::uint32_t> boundary_vertices;
+};
+PartTopology part_topology(const std::vector<std::array<std::uint32_t, 3>>& tris, const std::vector<int>& labels, int label) {
+  PartTopology topo;
+  std::set<std::pair<std::uint32_t, std::uint32_t>> directed;
+  std::set<std::uint32_t> vertices;
+  long faces = 0;
+  for (std::size_t f = 0; f < tris.size(); ++f) {
+    if (labels[f] != label) continue;
+    ++faces;
+    for (int k = 0; k < 3; ++k) {
+      vertices.insert(tris[f][k]);
+      if (!directed.insert({tris[f][k], tris[f][(k + 1) % 3]}).second) topo.consistent = false;
+    }
+  }
+  std::set<std::pair<std::uint32_t, std::uint32_t>> undirected;
+  std::unordered_map<std::uint32_t, std::uint32_t> next;
+  for (const auto& [a, b] : directed) {
+    undirected.insert({std::min(a, b), std::max(a, b)});
+    if (directed.count({b, a})) continue;
+    if (!next.emplace(a, b).second) topo.consistent = false;  // two boundary edges leave a
+  }
+  std::set<std::uint32_t> seen;
+  for (const auto& [a, b] : next) {
+    (void)b;
+    topo.boundary_vertices.push_back(a);
+    if (seen.count(a)) continue;
+    ++topo.boundary_loops;
+    for (auto v = a; !seen.count(v);) {
+      seen.insert(v);
+      const auto it = next.find(v);
+      if (it == next.end()) {
+        topo.consistent = false;
+        break;
+      }
+      v = it->second;
+    }
+  }
+  topo.euler = long(vertices.size()) - long(undirected.size()) + faces;
+  return topo;
+}
+
+// A capsule whose cylinder bands are 0.5 high: rings at z = 1, 0.5, 0, -0.5, -1.
+struct Capsule {
+  double r = 1, h = 2;
+  int segments = 48, rings_per_cap = 12, rings_cylinder = 4;
+  std::shared_ptr<const PreparedMesh> mesh = prepare_mesh(make_capsule(r, h, segments, rings_per_cap, rings_cylinder));
+  /// Key vertices on the vertex ring at height h/2 - m * h / rings_cylinder, every quarter turn.
+  std::vector<std::uint32_t> ring_keys(int m) const {
+    const auto first = 1 + std::uint32_t(rings_per_cap - 1 + m) * std::uint32_t(segments);
+    return {first, first + std::uint32_t(segments) / 4, first + std::uint32_t(segments) / 2,
+            first + 3 * std::uint32_t(segments) / 4};
+  }
+};
+
+double area_where(const SegmentationResult& r, const PreparedMesh& mesh, int label) {
+  const auto& p = r.remeshed ? r.positions : mesh.positions;
+  const auto& t = r.remeshed ? r.triangles : mesh.triangles;
+  double area = 0;
+  for (std::size_t f = 0; f < t.size(); ++f)
+    if (r.labels[f] == label) area += 0.5 * (p[t[f][1]] - p[t[f][0]]).cross(p[t[f][2]] - p[t[f][0]]).norm();
+  return area;
+}
+
+// The segment above (higher bbox centre) of a two-segment result.
+const Segment& upper(const SegmentationResult& r) {
+  const auto& a = r.segments[0];
+  const auto& b = r.segments[1];
+  return a.bbox_min[2] + a.bbox_max[2] > b.bbox_min[2] + b.bbox_max[2] ? a : b;
+}
+
+TEST(Segmentation, SnapCutsCapsuleAtEquatorIntoExactHalves) {
+  const int segments = 48, rings_per_cap = 12, rings_cylinder = 8;
+  const auto mesh = prepare_mesh(make_capsule(1, 2, segments, rings_per_cap, rings_cylinder));
+  const auto equator = capsule_equator(segments, rings_per_cap, rings_cylinder);
+  const auto line = line_through(*mesh, {equator[0], equator[12], equator[24], equator[36]}, true);
+  const auto r = segment_mesh(*mesh, {line});
+  ASSERT_EQ(r.segments.size(), 2u);
+  EXPECT_FALSE(r.remeshed);
+  EXPECT_TRUE(r.positions.empty());
+  ASSERT_EQ(r.labels.size(), mesh->triangles.size());
+  const double half = capsule_area_above(1, 2, 0);
+  for (const auto& s : r.segments) {
+    EXPECT_NEAR(s.area, half, 0.01 * half) << "segment " << s.label;
+    EXPECT_NEAR(s.boundary_length, 2 * M_PI, 0.01 * 2 * M_PI);
+    EXPECT_EQ(s.faces, mesh->triangles.size() / 2);
+    EXPECT_NEAR(s.area, area_where(r, *mesh, s.label), 1e-12);
+  }
+  EXPECT_NEAR(r.total_area, r.segments[0].area + r.segments[1].area, 1e-12);
+  EXPECT_EQ(r.cut_edges, std::size_t(segments));
+  EXPECT_NEAR(upper(r).bbox_min[2], 0, 1e-12);  // the cut is the equator ring itself
+  EXPECT_NEAR(upper(r).bbox_max[2], 2, 1e-12);
+  EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+}
+
+TEST(Segmentation, RemeshFollowsLoopBetweenVertexRingsWhereSnapCannot) {
+  // The plane z = 0.2 lies 40% of the way between the vertex rings at z = 0 and z = 0.5:
+  // snapping moves the cut to z = 0 (an error of 2*pi*0.2 in area), remeshing cuts at 0.2.
+  const Capsule capsule;
+  const auto& mesh = *capsule.mesh;
+  const double c = 0.2, above = capsule_area_above(capsule.r, capsule.h, c);
+  const auto line = line_of(plane_loop(mesh, {0, 0, 1}, c), true);
+
+  SegmentationOptions remesh;
+  remesh.mode = SegmentationMode::remesh;
+  const auto r = segment_mesh(mesh, {line}, remesh);
+  ASSERT_EQ(r.segments.size(), 2u);
+  EXPECT_TRUE(r.remeshed);
+  const double remesh_error = std::abs(upper(r).area - above);
+  EXPECT_LT(remesh_error, 0.01 * above);
+  EXPECT_NEAR(upper(r).boundary_length, 2 * M_PI, 0.01 * 2 * M_PI);
+  EXPECT_NEAR(upper(r).bbox_min[2], c, 1e-12);
+
+  const auto s = segment_mesh(mesh, {line});
+  ASSERT_EQ(s.segments.size(), 2u);
+  const double snap_error = std::abs(upper(s).area - above);
+  EXPECT_GT(snap_error, 0.08 * above);  // 2*pi*0.2 / (2*pi*1.8) = 11%
+  EXPECT_GT(snap_error, 20 * remesh_error);
+}
+
+TEST(Segmentation, RemeshedTiltedLoopIsExactAndValid) {
+  // A tilted plane z = 0.1 + 0.3 x through the cylinder part: the area above it is the
+  // horizontal plane's at its centre height (the tilt's contribution integrates to zero).
+  const Capsule capsule;
+  const auto& mesh = *capsule.mesh;
+  const auto line = line_of(plane_loop(mesh, Eigen::Vector3d(-0.3, 0, 1), 0.1), true);
+  SegmentationOptions options;
+  options.mode = SegmentationMode::remesh;
+  options.remesh_snap = 0;  // every crossing exactly on the plane
+  const auto r = segment_mesh(mesh, {line}, options);
+  ASSERT_EQ(r.segments.size(), 2u);
+  const double above = capsule_area_above(capsule.r, capsule.h, 0.1);
+  EXPECT_NEAR(upper(r).area, above, 0.01 * above);
+  EXPECT_NEAR(r.total_area, capsule_area(capsule.r, capsule.h), 0.01 * capsule_area(capsule.r, capsule.h));
+
+  // Area preserved, original vertices kept, new ones appended, faces traced to their source.
+  const double original = mesh_area(mesh.positions, mesh.triangles);
+  EXPECT_NEAR(mesh_area(r.positions, r.triangles), original, 1e-9 * original);
+  EXPECT_NEAR(r.total_area, original, 1e-9 * original);
+  ASSERT_GT(r.positions.size(), mesh.n_vertices());
+  for (std::size_t v = 0; v < mesh.n_vertices(); ++v) ASSERT_EQ(r.positions[v], mesh.positions[v]) << v;
+  ASSERT_EQ(r.source_faces.size(), r.triangles.size());
+  ASSERT_EQ(r.labels.size(), r.triangles.size());
+  std::vector<double> split_area(mesh.triangles.size(), 0);
+  for (std::size_t f = 0; f < r.triangles.size(); ++f) {
+    const auto& t = r.triangles[f];
+    split_area[r.source_faces[f]] += 0.5 * (r.positions[t[1]] - r.positions[t[0]]).cross(r.positions[t[2]] - r.positions[t[0]]).norm();
+    if (f < mesh.triangles.size()) {
+      EXPECT_EQ(r.source_faces[f], f);
+    }
+  }
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const auto& t = mesh.triangles[f];
+    const double a = 0.5 * (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]).norm();
+    ASSERT_NEAR(split_area[f], a, 1e-12) << "face " << f;
+  }
+
+  // Each part is a disc: consistently oriented, manifold, one boundary loop on the plane.
+  for (int label = 0; label < 2; ++label) {
+    const auto topo = part_topology(r.triangles, r.labels, label);
+    EXPECT_TRUE(topo.consistent) << "part " << label;
+    EXPECT_EQ(topo.boundary_loops, 1) << "part " << label;
+    EXPECT_EQ(topo.euler, 1) << "part " << label;
+    for (auto v : topo.boundary_vertices) {
+      ASSERT_GE(v, mesh.n_vertices());
+      const auto& p = r.positions[v];
+      ASSERT_NEAR(p.z(), 0.1 + 0.3 * p.x(), 1e-12);
+    }
+  }
+}
+
+TEST(Segmentation, RemeshAlongDetectedLineOnVerticesAndEdges) {
+  // A detected loop on the equator ring runs through vertices and along edges: the remeshed
+  // parts are the same halves, with few or no new vertices.
+  const int segments = 48, rings_per_cap = 12, rings_cylinder = 8;
+  const auto mesh = prepare_mesh(make_capsule(1, 2, segments, rings_per_cap, rings_cylinder));
+  const auto equator = capsule_equator(segments, rings_per_cap, rings_cylinder);
+  const auto line = line_through(*mesh, {equator[0], equator[12], equator[24], equator[36]}, true);
+  SegmentationOptions options;
+  options.mode = SegmentationMode::remesh;
+  const auto r = segment_mesh(*mesh, {line}, options);
+  ASSERT_EQ(r.segments.size(), 2u);
+  const double half = capsule_area_above(1, 2, 0);
+  for (int label = 0; label < 2; ++label) {
+    EXPECT_NEAR(r.segments[std::size_t(label)].area, half, 0.01 * half);
+    const auto topo = part_topology(r.triangles, r.labels, label);
+    EXPECT_TRUE(topo.consistent);
+    EXPECT_EQ(topo.boundary_loops, 1);
+    EXPECT_EQ(topo.euler, 1);
+  }
+  const double original = mesh_area(mesh->positions, mesh->triangles);
+  EXPECT_NEAR(r.total_area, original, 1e-9 * original);
+}
+
+TEST(Segmentation, ThreeLoopsGiveFourSegmentsOrderedByArea) {
+  // Long capsule (h = 6, bands 0.5 high) cut at z = 1.5, 0.5 and -1: parts of area
+  // 2pi + 2pi*1.5 = 5pi (top), 2pi*1 = 2pi, 2pi*1.5 = 3pi, 2pi + 2pi*2 = 6pi (bottom).
+  const int segments = 32, rings_per_cap = 8, rings_cylinder = 12;
+  const auto mesh = prepare_mesh(make_capsule(1, 6, segments, rings_per_cap, rings_cylinder));
+  auto ring = [&](int m) {  // keys on the vertex ring at z = 3 - m/2
+    const auto first = 1 + std::uint32_t(rings_per_cap - 1 + m) * std::uint32_t(segments);
+    return std::vector<std::uint32_t>{first, first + 8, first + 16, first + 24};
+  };
+  const std::vector<FeatureLineResult> lines{line_through(*mesh, ring(3), true), line_through(*mesh, ring(5), true),
+                                             line_through(*mesh, ring(8), true)};
+  for (auto mode : {SegmentationMode::snap, SegmentationMode::remesh}) {
+    SegmentationOptions options;
+    options.mode = mode;
+    const auto r = segment_mesh(*mesh, lines, options);
+    ASSERT_EQ(r.segments.size(), 4u);
+    const double expected[4] = {6 * M_PI, 5 * M_PI, 3 * M_PI, 2 * M_PI};
+    const double centre_z[4] = {-2.5, 2.75, -0.25, 1.0};  // bbox centres: bottom, top, the two middle ones
+    for (int label = 0; label < 4; ++label) {
+      const auto& s = r.segments[std::size_t(label)];
+      EXPECT_EQ(s.label, label);
+      EXPECT_NEAR(s.area, expected[label], 0.01 * expected[label]) << "label " << label;
+      EXPECT_NEAR(0.5 * (s.bbox_min[2] + s.bbox_max[2]), centre_z[label], 1e-9) << "label " << label;
+      // The middle parts have two boundary loops, the ends one.
+      const double loops = label >= 2 ? 2 : 1;
+      EXPECT_NEAR(s.boundary_length, loops * 2 * M_PI, 0.01 * loops * 2 * M_PI) << "label " << label;
+    }
+    EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+  }
+}
+
+TEST(Segmentation, OpenLineThatClosesNothingIsAGeometryError) {
+  const Capsule capsule;
+  const auto keys = capsule.ring_keys(2);  // the equator
+  const auto line = line_through(*capsule.mesh, {keys[0], keys[1], keys[2]}, false);  // half the ring
+  for (auto mode : {SegmentationMode::snap, SegmentationMode::remesh}) {
+    SegmentationOptions options;
+    options.mode = mode;
+    try {
+      segment_mesh(*capsule.mesh, {line}, options);
+      ADD_FAILURE() << "no error";
+    } catch (const GeometryError& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(message.rfind("the lines close no region: ", 0), 0u) << message;
+      EXPECT_NE(message.find("line 0 ends at"), std::string::npos) << message;
+      EXPECT_NE(message.find("must end on the mesh boundary or on another line"), std::string::npos) << message;
+    }
+  }
+}
+
+TEST(Segmentation, OpenLinesEndingOnTheBoundarySplitATube) {
+  // An open tube: one line from the bottom rim to the top rim leaves it in one piece; two
+  // lines cut it in halves. Lines ending one ring short of the rims are joined to them.
+  const int rings = 8, segments = 32;
+  const auto mesh = prepare_mesh(make_cylinder(1, 2, rings, segments, false));
+  auto column = [&](std::uint32_t k, int from_ring, int to_ring) {
+    return std::vector<std::uint32_t>{std::uint32_t(from_ring) * segments + k, std::uint32_t(rings / 2) * segments + k,
+                                      std::uint32_t(to_ring) * segments + k};
+  };
+  for (auto mode : {SegmentationMode::snap, SegmentationMode::remesh}) {
+    SegmentationOptions options;
+    options.mode = mode;
+    const auto a = line_through(*mesh, column(0, 0, rings), false), b = line_through(*mesh, column(16, 0, rings), false);
+    EXPECT_THROW(segment_mesh(*mesh, {a}, options), GeometryError);
+    const auto r = segment_mesh(*mesh, {a, b}, options);
+    ASSERT_EQ(r.segments.size(), 2u);
+    EXPECT_NEAR(r.segments[0].area, r.segments[1].area, 0.01 * r.segments[0].area);
+    EXPECT_NEAR(r.segments[0].boundary_length, 4, 0.04);  // two straight cuts of length 2
+
+    const auto a_short = line_through(*mesh, column(0, 1, rings - 1), false);
+    const auto b_short = line_through(*mesh, column(16, 1, rings - 1), false);
+    const auto joined = segment_mesh(*mesh, {a_short, b_short}, options);
+    ASSERT_EQ(joined.segments.size(), 2u);
+    EXPECT_NEAR(joined.segments[0].area, joined.segments[1].area, 0.01 * joined.segments[0].area);
+    options.attach_distance = 0;
+    EXPECT_THROW(segment_mesh(*mesh, {a_short, b_short}, options), GeometryError);
+  }
+}
+
+TEST(Segmentation, OpenLineEndingOnALoopSplitsItsSide) {
+  // The equator loop, and an open line from the equator over the north pole back to the
+  // equator: the south half and two north quarters.
+  const Capsule capsule;
+  const auto& mesh = *capsule.mesh;
+  const auto equator = capsule.ring_keys(2);
+  const auto loop = line_through(mesh, equator, true);
+  const auto arch = line_through(mesh, {equator[0], 0, equator[2]}, false);
+  const double half = capsule_area_above(capsule.r, capsule.h, 0);
+  for (auto mode : {SegmentationMode::snap, SegmentationMode::remesh}) {
+    SegmentationOptions options;
+    options.mode = mode;
+    const auto r = segment_mesh(mesh, {loop, arch}, options);
+    ASSERT_EQ(r.segments.size(), 3u);
+    EXPECT_NEAR(r.segments[0].area, half, 0.01 * half);
+    EXPECT_NEAR(r.segments[1].area, half / 2, 0.02 * half / 2);
+    EXPECT_NEAR(r.segments[2].area, half / 2, 0.02 * half / 2);
+    EXPECT_LT(r.segments[0].bbox_max[2], 1e-9);  // the south half
+    EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+    if (mode == SegmentationMode::remesh) {
+      for (int label = 0; label < 3; ++label) {
+        const auto topo = part_topology(r.triangles, r.labels, label);
+        EXPECT_TRUE(topo.consistent);
+        EXPECT_EQ(topo.boundary_loops, 1);
+        EXPECT_EQ(topo.euler, 1);
+      }
+    }
+  }
+}
+
+TEST(Segmentation, CrossingLoopsMeetAtNewVertices) {
+  // Two loops on a sphere crossing twice (planes z = 0.1 and x = 0.13): four discs.
+  const auto mesh = prepare_mesh(make_icosphere(1, 4));
+  const auto a = line_of(plane_loop(*mesh, {0, 0, 1}, 0.1), true);
+  const auto b = line_of(plane_loop(*mesh, {1, 0, 0}, 0.13), true);
+  SegmentationOptions options;
+  options.mode = SegmentationMode::remesh;
+  const auto r = segment_mesh(*mesh, {a, b}, options);
+  ASSERT_EQ(r.segments.size(), 4u);
+  double above = 0;
+  for (const auto& s : r.segments) {
+    const auto topo = part_topology(r.triangles, r.labels, s.label);
+    EXPECT_TRUE(topo.consistent) << s.label;
+    EXPECT_EQ(topo.boundary_loops, 1) << s.label;
+    EXPECT_EQ(topo.euler, 1) << s.label;
+    if (s.bbox_max[2] > 0.5) above += s.area;
+  }
+  EXPECT_NEAR(above, 2 * M_PI * 0.9, 0.01 * 2 * M_PI * 0.9);  // the sphere's zone above z = 0.1
+  const double original = mesh_area(mesh->positions, mesh->triangles);
+  EXPECT_NEAR(r.total_area, original, 1e-9 * original);
+}
+
+TEST(Segmentation, TinyRegionsAreReported) {
+  // A small loop inside one face (remesh), and a loop around the pole's fan (snap).
+  const Capsule capsule;
+  const auto& mesh = *capsule.mesh;
+  const std::uint32_t face = 2000;
+  std::vector<SurfacePoint> points;
+  for (const auto& w : {std::array<double, 3>{0.5, 0.25, 0.25}, {0.25, 0.5, 0.25}, {0.25, 0.25, 0.5}}) {
+    SurfacePoint p;
+    p.face = face;
+    p.barycentric = w;
+    const auto& t = mesh.triangles[face];
+    p.position = w[0] * mesh.positions[t[0]] + w[1] * mesh.positions[t[1]] + w[2] * mesh.positions[t[2]];
+    points.push_back(p);
+  }
+  SegmentationOptions options;
+  options.mode = SegmentationMode::remesh;
+  const auto r = segment_mesh(mesh, {line_of(points, true)}, options);
+  ASSERT_EQ(r.segments.size(), 2u);
+  const auto& t = mesh.triangles[face];
+  const double face_area = 0.5 * (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]).norm();
+  EXPECT_NEAR(r.segments[1].area, face_area / 16, 1e-12);  // the triangle between the three points
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_EQ(r.warnings[0].rfind("segment 1 is tiny: ", 0), 0u) << r.warnings[0];
+  for (int label = 0; label < 2; ++label) EXPECT_EQ(part_topology(r.triangles, r.labels, label).boundary_loops, 1);
+
+  // Merged instead: with the equator loop there are still two halves; alone it closes nothing.
+  options.merge_tiny_segments = true;
+  const auto merged = segment_mesh(mesh, {line_through(mesh, capsule.ring_keys(2), true), line_of(points, true)}, options);
+  ASSERT_EQ(merged.segments.size(), 2u);
+  EXPECT_NEAR(merged.segments[0].area, merged.segments[1].area, 0.01 * merged.segments[0].area);
+  ASSERT_EQ(merged.warnings.size(), 2u);
+  EXPECT_EQ(merged.warnings[0], "line 1 separates no segments from each other (it runs inside one segment)");
+  EXPECT_EQ(merged.warnings[1].rfind("1 segment(s) below min_segment_area_fraction were merged", 0), 0u) << merged.warnings[1];
+  EXPECT_THROW(segment_mesh(mesh, {line_of(points, true)}, options), GeometryError);
+
+  const auto pole = line_through(mesh, capsule.ring_keys(1 - capsule.rings_per_cap), true);
+  SegmentationOptions snap;
+  snap.min_segment_area_fraction = 0.01;
+  const auto s = segment_mesh(mesh, {pole}, snap);
+  ASSERT_EQ(s.segments.size(), 2u);
+  EXPECT_EQ(s.segments[1].faces, std::size_t(capsule.segments));  // the fan around the pole
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_EQ(s.warnings[0].rfind("segment 1 is tiny: ", 0), 0u) << s.warnings[0];
+}
+
+TEST(Segmentation, BadInputIsRejected) {
+  const Capsule capsule;
+  EXPECT_THROW(segment_mesh(*capsule.mesh, {}), InvalidInputError);
+  auto line = line_through(*capsule.mesh, capsule.ring_keys(2), true);
+  auto bad_face = line;
+  bad_face.refined[3].face = std::uint32_t(capsule.mesh->triangles.size());
+  EXPECT_THROW(segment_mesh(*capsule.mesh, {bad_face}), InvalidInputError);
+  auto bad_weights = line;
+  bad_weights.refined[3].barycentric = {0.5, 0.5, 0.5};
+  EXPECT_THROW(segment_mesh(*capsule.mesh, {bad_weights}), InvalidInputError);
+  SegmentationOptions options;
+  options.min_segment_area_fraction = 1.5;
+  EXPECT_THROW(segment_mesh(*capsule.mesh, {line}, options), InvalidInputError);
+}
+
+}  // namespace
+}  // namespace featureline
