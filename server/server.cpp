@@ -521,7 +521,12 @@ struct FeaturelineServer::Impl {
     const json body = json_body(req);
     SegmentationOptions options_;
     for (auto it = body.begin(); it != body.end(); ++it)
-      if (it.key() != "lines" && it.key() != "mode") throw InvalidInputError("unknown field \"" + it.key() + "\"");
+      if (it.key() != "lines" && it.key() != "mode" && it.key() != "merge_tiny_segments")
+        throw InvalidInputError("unknown field \"" + it.key() + "\"");
+    if (body.contains("merge_tiny_segments")) {
+      if (!body["merge_tiny_segments"].is_boolean()) throw InvalidInputError("\"merge_tiny_segments\" must be true or false");
+      options_.merge_tiny_segments = body["merge_tiny_segments"].get<bool>();
+    }
     if (!body.contains("lines")) throw InvalidInputError("\"lines\" is required");
     if (body.contains("mode")) {
       const auto mode = body["mode"].is_string() ? parse_segmentation_mode(body["mode"].get<std::string>()) : std::nullopt;

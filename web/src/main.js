@@ -522,7 +522,8 @@ async function decompose() {
     status.textContent = 'Place a line with at least two keys first.';
     return;
   }
-  const request = { lines, mode: $('decompose-mode').value };
+  // Slivers left where a line doubles back to a pinned key join their neighbour.
+  const request = { lines, mode: $('decompose-mode').value, merge_tiny_segments: true };
   const meshId = state.mesh.id;
   status.textContent = 'Decomposing…';
   $('decompose').disabled = true;
