@@ -327,7 +327,8 @@ async function run() {
 
   // ---- a second line ---------------------------------------------------------------------------
   await page.click('#add-line');
-  for (const v of [200, 1500]) {
+  // Near the left and right borders, across the ridge: with the first line it cuts the field in two.
+  for (const v of [821, 859]) {
     const p = await screenOf(v);
     await page.mouse.click(p.x, p.y);
     await idle();
@@ -359,20 +360,21 @@ async function run() {
   await page.screenshot({ path: path.join(path.dirname(ARTIFACT), 'web-curvature.png') });
   await page.uncheck('#curvature-toggle');
 
-  // ---- decomposition: a result, or the graceful message when the server has none ---------------
+  // ---- decomposition by the real server: the border-to-border line cuts the field in two -----------
   await page.click('#decompose');
   await until('the decomposition to finish', async () => {
     const t = await state();
     return t.segmentation || t.decomposeMessage;
   }, 30000);
   s = await state();
-  if (s.segmentation) {
-    const seg = s.segmentation;
-    check(seg.segments.length >= 1 && (seg.faceColored ? seg.labels.length === 3200 : seg.labels.length > 0),
-      `decomposition answered ${seg.segments.length} segment(s)`, JSON.stringify(seg).slice(0, 300));
+  const seg = s.segmentation;
+  check(seg && seg.segments.length >= 2 && seg.faceColored && seg.labels.length === 3200,
+    `decomposition answered ${seg?.segments?.length} segment(s), a label per face`, () => JSON.stringify(seg ?? s.decomposeMessage).slice(0, 300));
+  if (seg) {
+    const total = seg.segments.reduce((a, x) => a + x.area, 0);
+    check(Math.abs(total - seg.total_area) < 1e-9 && seg.segments[1].area > 0.2 * total,
+      `the two large parts are real halves (areas ${seg.segments.map((x) => x.area.toFixed(3)).join(', ')})`);
     check((await page.locator('#segments tbody tr').count()) === seg.segments.length + 1, 'the segments and their areas are listed');
-  } else {
-    check(/not available on this server/.test(s.decomposeMessage), 'decomposition: graceful message when the server has none', s.decomposeMessage);
   }
 
   // ---- the screenshot -------------------------------------------------------------------------------
