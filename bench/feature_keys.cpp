@@ -31,13 +31,13 @@ std::vector<std::uint32_t> pick_feature_keys(const PreparedMesh& mesh, std::mt19
   const double threshold = mesh.statistics.abs_curvature_p90;
   for (int attempt = 0; attempt < 1000; ++attempt) {
     const auto v0 = std::uint32_t(rng() % mesh.n_vertices());
-    if (mesh.component[v0] < 0 || std::abs(mesh.mean_curvature[v0]) < threshold) continue;
-    const double sign = mesh.mean_curvature[v0] > 0 ? 1 : -1;
+    if (mesh.component[v0] < 0 || std::abs(dominant_curvature(mesh.curvature, v0)) < threshold) continue;
+    const double sign = dominant_curvature(mesh.curvature, v0) > 0 ? 1 : -1;
     auto best_in = [&](const std::vector<std::uint32_t>& ring, std::uint32_t not_near) {
       std::uint32_t best = ring.empty() ? v0 : ring[0];
       double best_score = -1e300;
       for (auto v : ring) {
-        const double score = sign * mesh.mean_curvature[v] +
+        const double score = sign * dominant_curvature(mesh.curvature, v) +
                              (not_near == v0 ? 0 : 1e-3 * (mesh.positions[v] - mesh.positions[not_near]).norm());
         if (score > best_score) best_score = score, best = v;
       }

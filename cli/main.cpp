@@ -23,7 +23,7 @@ using nlohmann::json;
 const char* const kUsage = R"(usage:
   featureline detect MESH --keys 10,20,30 [options]
   featureline segment MESH --loop 1,2,3,4 [--loop 5,6,7] [--line 8,9] [--mode snap|remesh] [options]
-  featureline info MESH [--smooth-curvature N]
+  featureline info MESH [--curvature M] [--curvature-radius R] [--crease-angle A] [--smooth-curvature N]
 
 segment options:
   --loop LIST             keys of a closed line (repeatable)
@@ -47,6 +47,9 @@ detect options:
   --force F               smooth (default) | paper
   --free-keys             interior keys may move with the snake
   --no-refine             stop after the initial line
+  --curvature M           jet (default: fitted over a radius that follows the noise) | cotangent (the paper)
+  --curvature-radius R    jet radius in local edge lengths (0 = automatic, up to 12)
+  --crease-angle A        dihedral angle in degrees above which an edge is a crease (0 = automatic, -1 = none)
   --smooth-curvature N    Laplacian passes over the curvature field
   --options JSON          any options as a JSON object (see api/openapi.yaml); flags win
   --out FILE              write FILE.json or FILE.glb instead of printing JSON
@@ -99,7 +102,7 @@ int run(int argc, char** argv) {
   json snake = json::object();
   std::string keys_text, out_path;
   bool closed = false;
-  int smoothing = 0;
+  featureline::PrepareOptions prepare_options;
   std::vector<std::pair<std::string, bool>> segment_lines;  // keys, closed
   std::string mode_text = "snap";
   for (int i = 3; i < argc; ++i) {
@@ -129,7 +132,13 @@ int run(int argc, char** argv) {
     else if (flag == "--force") snake["force"] = value();
     else if (flag == "--free-keys") options["pin_interior_keys"] = false;
     else if (flag == "--no-refine") options["refine"] = false;
-    else if (flag == "--smooth-curvature") smoothing = parse_int(value(), "--smooth-curvature");
+    else if (flag == "--smooth-curvature") prepare_options.curvature.smoothing_passes = parse_int(value(), "--smooth-curvature");
+    else if (flag == "--curvature") {
+      const auto method = featureline::parse_curvature_method(value());
+      if (!method) throw UsageError("--curvature must be jet or cotangent");
+      prepare_options.curvature.method = *method;
+    } else if (flag == "--curvature-radius") prepare_options.curvature.radius = parse_number(value(), "--curvature-radius");
+    else if (flag == "--crease-angle") prepare_options.curvature.crease_angle = parse_number(value(), "--crease-angle");
     else if (flag == "--options") {
       json given;
       try {
@@ -153,8 +162,6 @@ int run(int argc, char** argv) {
   const auto load_start = std::chrono::steady_clock::now();
   featureline::RawMesh raw = featureline::read_mesh_file(mesh_path);
   const double load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start).count();
-  featureline::PrepareOptions prepare_options;
-  prepare_options.curvature_smoothing_passes = smoothing;
   const auto mesh = featureline::prepare_mesh(std::move(raw), prepare_options);
 
   if (command == "info") {

@@ -13,7 +13,33 @@ double ms_since(Clock::time_point start) { return std::chrono::duration<double, 
 
 struct Piece {
   std::size_t begin, end;  // indices into the (unrolled) line, both ends pinned
+  bool exact = false;      // a clean crease run: kept as it is
 };
+
+// Whether the mesh edge a-b is a crease of the line's kind (any kind when sign is 0).
+bool is_crease_edge(const PreparedMesh& pm, std::uint32_t a, std::uint32_t b, double sign) {
+  for (auto k = pm.neighbor_offsets[a]; k < pm.neighbor_offsets[a + 1]; ++k)
+    if (pm.neighbors[k] == b) {
+      const auto crease = pm.curvature.crease[k];
+      return crease != 0 && (sign == 0 || crease == sign);
+    }
+  return false;
+}
+
+// Whether every edge of the piece is a crease of the line's kind. Only whole pieces count: a
+// sharp bend sampled by a mesh whose edges do not follow it has scattered short runs of sharp
+// edges beside the true bend, which the snake must still refine.
+bool is_crease_piece(const PreparedMesh& pm, const std::vector<std::uint32_t>& line, const Piece& piece, double sign) {
+  for (std::size_t i = piece.begin; i < piece.end; ++i)
+    if (!is_crease_edge(pm, line[i], line[i + 1], sign)) return false;
+  return true;
+}
+
+std::vector<SurfacePoint> vertex_points(const PreparedMesh& pm, const std::vector<std::uint32_t>& vertices) {
+  std::vector<SurfacePoint> points;
+  for (auto v : vertices) points.push_back(surface_point_at_vertex(pm, v));
+  return points;
+}
 
 }  // namespace
 
@@ -25,6 +51,25 @@ SurfacePoint surface_point_at_vertex(const PreparedMesh& pm, std::uint32_t v) {
   const auto& t = pm.triangles[s.face];
   for (int k = 0; k < 3; ++k) s.barycentric[k] = t[k] == v ? 1.0 : 0.0;
   return s;
+}
+
+double mean_feature_strength(const PreparedMesh& pm, const std::vector<SurfacePoint>& points, double feature_sign,
+                             double cap) {
+  auto strength = [&](const SurfacePoint& p) {
+    const auto& corners = pm.triangles[p.face];
+    double value = 0;
+    for (int k = 0; k < 3; ++k)
+      value += p.barycentric[k] * std::min(cap, feature_value(pm.curvature, corners[k], feature_sign) / pm.curvature_scale);
+    return value;
+  };
+  double sum = 0, length = 0;
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    const double l = (points[i].position - points[i - 1].position).norm();
+    sum += l * 0.5 * (strength(points[i]) + strength(points[i - 1]));
+    length += l;
+  }
+  if (length > 0) return sum / length;
+  return points.empty() ? 0 : strength(points.front());
 }
 
 double polyline_length(const std::vector<SurfacePoint>& points, bool closed) {
@@ -81,6 +126,12 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   SnakeOptions snake_options = options.snake;
   if (snake_options.feature_sign == 0 && options.initial.sign_aware)
     snake_options.feature_sign = keys_feature_sign(pm, request.keys, options.initial);
+  // Clean creases are the feature itself: their runs are kept exactly.
+  if (options.exact_crease_edges > 0 && pm.curvature.noise < options.exact_crease_noise) {
+    for (Piece& piece : pieces)
+      piece.exact = piece.end - piece.begin >= std::size_t(options.exact_crease_edges) &&
+                    is_crease_piece(pm, line, piece, snake_options.feature_sign);
+  }
 
   std::vector<SurfacePoint>& refined = result.refined;
   while (!pieces.empty()) {
@@ -88,9 +139,20 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
     pieces.pop_front();
     const std::vector<std::uint32_t> sub(line.begin() + std::ptrdiff_t(piece.begin), line.begin() + std::ptrdiff_t(piece.end) + 1);
     std::vector<SurfacePoint> points;
-    if (sub.size() < 3) {
+    PieceReport report;
+    report.from = sub.front();
+    report.to = sub.back();
+    report.edges = sub.size() - 1;
+    const auto initial_points = vertex_points(pm, sub);
+    report.initial_strength = mean_feature_strength(pm, initial_points, snake_options.feature_sign, snake_options.curvature_cap);
+    if (piece.exact) {
+      points = initial_points;
+      report.kept = "crease";
+    } else if (sub.size() < 3) {
       // a single edge is already straight on the surface
-      for (auto v : sub) points.push_back(surface_point_at_vertex(pm, v));
+      points = initial_points;
+      report.kept = "initial";
+      report.reason = "a single edge";
     } else {
       auto t0 = Clock::now();
       const FeatureStrip strip = extract_feature_strip(pm, sub, options.strip);
@@ -103,8 +165,8 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
         // Split where the layout folded, keeping both halves at least min_piece_edges long.
         std::size_t at = piece.begin + flat.worst_flip_line_index;
         at = std::clamp(at, piece.begin + std::size_t(options.min_piece_edges), piece.end - std::size_t(options.min_piece_edges));
-        pieces.push_front({at, piece.end});
-        pieces.push_front({piece.begin, at});
+        pieces.push_front({at, piece.end, false});
+        pieces.push_front({piece.begin, at, false});
         ++result.splits;
         continue;
       }
@@ -116,11 +178,24 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
         const SnakeResult snake = refine_with_snake(pm, strip, flat, snake_options);
         points = map_to_surface(pm, strip, snake.points);
         result.iterations += snake.iterations;
-        result.refined_by_snake = true;
+        report.iterations = snake.iterations;
+        report.iteration_cap = !snake.converged && snake.iterations >= snake_options.max_iterations;
+        report.refined_strength = mean_feature_strength(pm, points, snake_options.feature_sign, snake_options.curvature_cap);
+        if (report.refined_strength < options.keep_initial_below * report.initial_strength) {
+          // Never worse: the snake left the feature (cut a corner, was drawn to another
+          // feature); the initial line is the better answer for this piece.
+          points = initial_points;
+          report.kept = "initial";
+          report.reason = "the refined line was weaker on the feature than the initial line";
+        } else {
+          result.refined_by_snake = true;
+        }
       } catch (const GeometryError& e) {
         // A pinned end whose every strip triangle folded or distorted: keep this piece's
         // initial line rather than failing the whole line, and say so.
-        for (auto v : sub) points.push_back(surface_point_at_vertex(pm, v));
+        points = initial_points;
+        report.kept = "initial";
+        report.reason = e.what();
         result.warnings.push_back("line vertices " + std::to_string(sub.front()) + ".." + std::to_string(sub.back()) +
                                   " were not refined: " + e.what());
       }
@@ -128,6 +203,7 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
       result.strip_faces += strip.triangles.size();
     }
     ++result.pieces;
+    result.piece_reports.push_back(std::move(report));
     // Pieces meet at pinned vertices: keep the shared point once.
     refined.insert(refined.end(), points.begin() + (refined.empty() ? 0 : 1), points.end());
   }

@@ -22,12 +22,37 @@ struct FeatureLineOptions {
   /// A strip whose flattening folds over near the line is split in two (the paper's remedy for
   /// highly curved lines) until pieces are this short (in line edges).
   int min_piece_edges = 6;
+  /// A piece (between keys) whose initial line runs along crease edges only (engine/curvature.h),
+  /// at least this many, is kept exactly, corners included, on meshes whose estimated noise is
+  /// below `exact_crease_noise`: a clean crease is the feature, smoothing it only cuts its
+  /// bends. 0 refines creases like any other part.
+  int exact_crease_edges = 2;
+  /// Noise (RMS along the normal, local edge lengths) above which crease vertices are no longer
+  /// trusted to lie on the true crease and crease runs are refined by the snake.
+  double exact_crease_noise = 0.02;
+  /// Never worse: a refined piece whose mean feature strength along it falls below this share
+  /// of its initial line's is replaced by the initial line (and reported in `pieces`).
+  double keep_initial_below = 0.9;
 };
 
 struct FeatureLineRequest {
   std::vector<std::uint32_t> keys;
   bool closed = false;
   FeatureLineOptions options;
+};
+
+/// How one piece of the line (between pinned points) was produced.
+struct PieceReport {
+  std::uint32_t from = 0, to = 0;  ///< mesh vertices at its ends
+  std::size_t edges = 0;           ///< initial line edges in it
+  /// "refined" (the snake's line), "crease" (an exact crease run), "initial" (the snake's line
+  /// was worse, or the piece is a single edge, or the strip could not be refined)
+  std::string kept = "refined";
+  std::string reason;              ///< why the initial line was kept
+  int iterations = 0;              ///< snake iterations
+  bool iteration_cap = false;      ///< the snake stopped at its iteration cap, not converged
+  double initial_strength = 0;     ///< mean feature strength along the initial line
+  double refined_strength = 0;     ///< ... along the snake's line (0 when not refined)
 };
 
 struct StageTimings {
@@ -47,6 +72,7 @@ struct FeatureLineResult {
   std::size_t strip_faces = 0;  ///< strip triangles summed over pieces
   std::size_t pieces = 0;       ///< pieces refined separately (segments, halves of loops, splits)
   std::size_t splits = 0;       ///< pieces split because their flattening folded over
+  std::vector<PieceReport> piece_reports;  ///< one per piece, in line order
   StageTimings timings;
   std::vector<std::string> warnings;
 };
@@ -57,6 +83,12 @@ FeatureLineResult detect_feature_line(const PreparedMesh& mesh, const FeatureLin
 
 /// The surface point sitting exactly on mesh vertex v (barycentric 1 on one face corner).
 SurfacePoint surface_point_at_vertex(const PreparedMesh& mesh, std::uint32_t v);
+
+/// Mean feature strength (feature value of the line's sign over the curvature scale, capped
+/// at `cap`) along a polyline of surface points, weighted by arc length; values inside faces
+/// are interpolated barycentrically. The "never worse" test compares lines with it.
+double mean_feature_strength(const PreparedMesh& mesh, const std::vector<SurfacePoint>& points, double feature_sign,
+                             double cap);
 
 /// Length of a polyline of surface points (closing segment included when `closed`).
 double polyline_length(const std::vector<SurfacePoint>& points, bool closed);

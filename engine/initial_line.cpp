@@ -77,7 +77,7 @@ double keys_feature_sign(const PreparedMesh& mesh, const std::vector<std::uint32
   if (!options.sign_aware) return 0;
   int positive = 0, negative = 0;
   for (auto k : keys) {
-    const double h = mesh.mean_curvature[k] / mesh.curvature_scale;
+    const double h = dominant_curvature(mesh.curvature, k) / mesh.curvature_scale;
     if (h > 0.05) ++positive;
     if (h < -0.05) ++negative;
   }
@@ -146,7 +146,8 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
   std::vector<double> angle_to_goal, angle_to_previous, distance, curvature_badness;
   std::vector<double> f_o1, f_o2, f_d, f_c;
   double closest = start_to_end.norm();
-  const double goal_curvature = mesh.mean_curvature[to];
+  auto C = [&](std::uint32_t v) { return dominant_curvature(mesh.curvature, v); };
+  const double goal_curvature = C(to);
 
   while (true) {
     const std::uint32_t current = path.back();
@@ -181,12 +182,12 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
       distance[i] = (P[to] - P[v]).norm();
       switch (options.marching_curvature_term) {
         case MarchingCurvatureTerm::similar_to_current:
-          curvature_badness[i] = std::abs(mesh.mean_curvature[v] - mesh.mean_curvature[current]);
+          curvature_badness[i] = std::abs(C(v) - C(current));
           break;
         case MarchingCurvatureTerm::similar_to_end:
-          curvature_badness[i] = std::abs(mesh.mean_curvature[v] - goal_curvature);
+          curvature_badness[i] = std::abs(C(v) - goal_curvature);
           break;
-        case MarchingCurvatureTerm::high_magnitude: curvature_badness[i] = -std::abs(mesh.mean_curvature[v]); break;
+        case MarchingCurvatureTerm::high_magnitude: curvature_badness[i] = -std::abs(C(v)); break;
       }
     }
     rank_scores(angle_to_goal, f_o1);
@@ -244,7 +245,15 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
       if (s.closed(w) || (w != to && is_blocked(blocked, w))) continue;
       double weight = 1;
       if (feature_weighted) {
-        const double strength = 0.5 * (strength_v + feature_strength(mesh, w, feature_sign));
+        // A crease edge of the line's kind is a feature whatever its ends' curvature says
+        // (on skinny CAD triangles the vertex fields are unreliable, a dihedral angle is not).
+        const auto crease = mesh.curvature.crease[k];
+        const bool on_crease = crease != 0 && (feature_sign == 0 || crease == feature_sign);
+        // An edge joining two crease vertices without being a crease is a chord across a
+        // face (a CAD cap's long diagonal cutting a rounded corner): no feature at all.
+        const bool chord = !on_crease && mesh.curvature.on_crease[v] && mesh.curvature.on_crease[w];
+        const double strength =
+            on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v + feature_strength(mesh, w, feature_sign));
         weight = floor + (1 - floor) * (1 - strength);
       }
       const double cost = s.cost[v] + mesh.neighbor_edge_lengths[k] * weight;

@@ -83,12 +83,11 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
                                                              double feature_sign = 0,
                                                              const std::vector<std::uint32_t>* blocked = nullptr);
 
-/// Feature strength in [0, 1] of vertex v: |H| (or the keys' signed H when `feature_sign` is
-/// +1 or -1) over the mesh's curvature scale, clamped.
+/// Feature strength in [0, 1] of vertex v: its feature value for lines of `feature_sign`
+/// (engine/curvature.h) over the mesh's curvature scale, clamped.
 inline double feature_strength(const PreparedMesh& mesh, std::uint32_t v, double feature_sign) {
-  const double h = mesh.mean_curvature[v] / mesh.curvature_scale;
-  const double s = feature_sign == 0 ? (h < 0 ? -h : h) : feature_sign * h;
-  return s < 0 ? 0 : (s > 1 ? 1 : s);
+  const double s = feature_value(mesh.curvature, v, feature_sign) / mesh.curvature_scale;
+  return s > 1 ? 1 : s;
 }
 
 /// +1 when every key sits on a ridge (H above 5% of the curvature scale), -1 when every key sits

@@ -91,96 +91,6 @@ double percentile(std::vector<double> values, double q) {
 
 }  // namespace
 
-std::vector<Eigen::Vector3d> compute_vertex_normals(const TriMesh& mesh) {
-  std::vector<Eigen::Vector3d> normals(mesh.n_vertices(), Eigen::Vector3d::Zero());
-  for (auto f : mesh.faces()) {
-    Eigen::Vector3d p[3];
-    int idx[3];
-    int k = 0;
-    for (auto v : mesh.fv_range(f)) {
-      idx[k] = v.idx();
-      p[k++] = to_eigen(mesh.point(v));
-    }
-    Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]);
-    const double len = n.norm();
-    if (!(len > 0)) continue;
-    n /= len;
-    for (int i = 0; i < 3; ++i) {
-      const Eigen::Vector3d a = p[(i + 1) % 3] - p[i], b = p[(i + 2) % 3] - p[i];
-      const double angle = std::atan2(a.cross(b).norm(), a.dot(b));
-      normals[idx[i]] += angle * n;
-    }
-  }
-  for (auto& n : normals) {
-    const double len = n.norm();
-    if (len > 0) n /= len;
-  }
-  return normals;
-}
-
-std::vector<double> compute_mean_curvature(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& normals) {
-  const std::size_t n = mesh.n_vertices();
-  std::vector<Eigen::Vector3d> laplace(n, Eigen::Vector3d::Zero());
-  std::vector<double> area(n, 0.0);
-  // Meyer, Desbrun, Schroeder, Barr 2003: K(x_i) = 1/(2 A_mixed) sum_j (cot a_ij + cot b_ij)(x_i - x_j),
-  // and K = 2 H n. The mixed area uses Voronoi areas on non-obtuse triangles and the
-  // area/2, area/4 split on obtuse ones, so the areas tile the surface.
-  for (auto f : mesh.faces()) {
-    int idx[3];
-    Eigen::Vector3d p[3];
-    int k = 0;
-    for (auto v : mesh.fv_range(f)) {
-      idx[k] = v.idx();
-      p[k++] = to_eigen(mesh.point(v));
-    }
-    const double double_area = (p[1] - p[0]).cross(p[2] - p[0]).norm();
-    if (!(double_area > 1e-300)) continue;  // zero-area triangles carry no curvature information
-    double cot[3];
-    double dots[3];
-    for (int i = 0; i < 3; ++i) {
-      const Eigen::Vector3d a = p[(i + 1) % 3] - p[i], b = p[(i + 2) % 3] - p[i];
-      dots[i] = a.dot(b);
-      cot[i] = dots[i] / double_area;  // |a x b| == double_area for every corner
-    }
-    for (int i = 0; i < 3; ++i) {
-      const int j = (i + 1) % 3, l = (i + 2) % 3;
-      // the edge (j, l) is opposite corner i
-      const Eigen::Vector3d e = p[j] - p[l];
-      laplace[idx[j]] += cot[i] * e;
-      laplace[idx[l]] -= cot[i] * e;
-    }
-    const double tri_area = 0.5 * double_area;
-    const bool obtuse = dots[0] < 0 || dots[1] < 0 || dots[2] < 0;
-    for (int i = 0; i < 3; ++i) {
-      if (!obtuse) {
-        const int j = (i + 1) % 3, l = (i + 2) % 3;
-        area[idx[i]] += 0.125 * ((p[i] - p[l]).squaredNorm() * cot[j] + (p[i] - p[j]).squaredNorm() * cot[l]);
-      } else {
-        area[idx[i]] += dots[i] < 0 ? 0.5 * tri_area : 0.25 * tri_area;
-      }
-    }
-  }
-  std::vector<double> curvature(n, 0.0);
-  std::vector<char> on_boundary(n, 0);
-  for (auto v : mesh.vertices()) {
-    on_boundary[v.idx()] = mesh.is_boundary(v) || !mesh.is_manifold(v);
-    if (area[v.idx()] > 0) curvature[v.idx()] = 0.25 * laplace[v.idx()].dot(normals[v.idx()]) / area[v.idx()];
-  }
-  // The cotangent Laplacian is incomplete at the boundary; borrow from interior neighbours.
-  std::vector<double> boundary_value(n, 0.0);
-  for (auto v : mesh.vertices()) {
-    if (!on_boundary[v.idx()]) continue;
-    double sum = 0;
-    int count = 0;
-    for (auto w : mesh.vv_range(v))
-      if (!on_boundary[w.idx()]) sum += curvature[w.idx()], ++count;
-    boundary_value[v.idx()] = count > 0 ? sum / count : 0.0;
-  }
-  for (std::size_t v = 0; v < n; ++v)
-    if (on_boundary[v]) curvature[v] = boundary_value[v];
-  return curvature;
-}
-
 std::size_t PreparedMesh::memory_bytes() const {
   // OpenMesh's array kernel: points, normals-free vertices (halfedge handle), halfedges, edges, faces.
   std::size_t bytes = sizeof(PreparedMesh);
@@ -189,7 +99,8 @@ std::size_t PreparedMesh::memory_bytes() const {
   bytes += mesh.n_edges() * 4 + mesh.n_faces() * (sizeof(int) + 4);
   bytes += source_triangle.capacity() * sizeof(std::uint32_t) + triangles.capacity() * 3 * sizeof(std::uint32_t);
   bytes += positions.capacity() * sizeof(Eigen::Vector3d) + vertex_normals.capacity() * sizeof(Eigen::Vector3d);
-  bytes += mean_curvature.capacity() * sizeof(double);
+  bytes += (curvature.mean.capacity() + curvature.k_max.capacity() + curvature.k_min.capacity()) * sizeof(double);
+  bytes += curvature.crease.capacity() + curvature.on_crease.capacity();
   bytes += neighbor_offsets.capacity() * sizeof(std::uint32_t) + neighbors.capacity() * sizeof(std::uint32_t);
   bytes += neighbor_edge_lengths.capacity() * sizeof(double) + component.capacity() * sizeof(std::int32_t);
   for (const auto& w : warnings) bytes += w.capacity();
@@ -202,8 +113,6 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   // report every such face ourselves, so its stream is switched off once for the process.
   static std::once_flag quiet;
   std::call_once(quiet, [] { omerr().disable(); });
-  if (options.curvature_smoothing_passes < 0 || options.curvature_smoothing_passes > 100)
-    throw InvalidInputError("curvature_smoothing_passes must be between 0 and 100");
   auto prepared = std::make_shared<PreparedMesh>();
   PreparedMesh& pm = *prepared;
   MeshStatistics& stats = pm.statistics;
@@ -335,18 +244,13 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   stats.bbox_max = {hi.x(), hi.y(), hi.z()};
 
   pm.vertex_normals = compute_vertex_normals(mesh);
-  pm.mean_curvature = compute_mean_curvature(mesh, pm.vertex_normals);
-  for (int pass = 0; pass < options.curvature_smoothing_passes; ++pass) {
-    std::vector<double> smoothed(pm.mean_curvature);
-    for (std::uint32_t v = 0; v < n; ++v) {
-      const auto begin = pm.neighbor_offsets[v], end = pm.neighbor_offsets[v + 1];
-      if (begin == end) continue;
-      double sum = 0;
-      for (auto k = begin; k < end; ++k) sum += pm.mean_curvature[pm.neighbors[k]];
-      smoothed[v] = 0.5 * (pm.mean_curvature[v] + sum / double(end - begin));
-    }
-    pm.mean_curvature.swap(smoothed);
-  }
+  pm.curvature = compute_curvature_field(mesh, pm.positions, pm.vertex_normals, {pm.neighbor_offsets, pm.neighbors},
+                                         options.curvature);
+  stats.curvature_method = to_string(options.curvature.method);
+  stats.noise = pm.curvature.noise;
+  stats.curvature_radius = pm.curvature.radius;
+  stats.crease_angle = pm.curvature.crease_angle;
+  stats.crease_edges = pm.curvature.crease_edges;
 
   std::vector<double> magnitudes;
   magnitudes.reserve(n);
@@ -354,9 +258,9 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   stats.curvature_max = -HUGE_VAL;
   for (std::uint32_t v = 0; v < n; ++v) {
     if (pm.component[v] < 0) continue;
-    magnitudes.push_back(std::abs(pm.mean_curvature[v]));
-    stats.curvature_min = std::min(stats.curvature_min, pm.mean_curvature[v]);
-    stats.curvature_max = std::max(stats.curvature_max, pm.mean_curvature[v]);
+    magnitudes.push_back(feature_value(pm.curvature, v, 0));
+    stats.curvature_min = std::min(stats.curvature_min, dominant_curvature(pm.curvature, v));
+    stats.curvature_max = std::max(stats.curvature_max, dominant_curvature(pm.curvature, v));
   }
   stats.abs_curvature_p50 = percentile(magnitudes, 0.5);
   stats.abs_curvature_p90 = percentile(magnitudes, 0.9);

@@ -3,7 +3,6 @@
 // instance between threads without copying or locking.
 #pragma once
 
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -12,17 +11,14 @@
 #include <string>
 #include <vector>
 
+#include "engine/curvature.h"
 #include "engine/mesh_io.h"
+#include "engine/tri_mesh.h"
 
 namespace featureline {
 
-/// The one mesh type of the project: OpenMesh triangle mesh with double precision.
-using TriMesh = OpenMesh::TriMesh_ArrayKernelT<OpenMesh::DefaultTraitsDouble>;
-
 struct PrepareOptions {
-  /// Laplacian smoothing passes applied to the mean curvature field (0 = raw cotangent values).
-  /// Each pass replaces H_i by (H_i + mean of its neighbours) / 2; helps on noisy scans.
-  int curvature_smoothing_passes = 0;
+  CurvatureOptions curvature;  ///< the feature field and creases (engine/curvature.h)
 };
 
 /// Counts and measures of a prepared mesh, as `featureline info` and the server report them.
@@ -42,9 +38,15 @@ struct MeshStatistics {
   double mean_edge_length = 0;
   std::array<double, 3> bbox_min{0, 0, 0};
   std::array<double, 3> bbox_max{0, 0, 0};
+  /// Range of the dominant signed curvature (the principal curvature of larger magnitude).
   double curvature_min = 0, curvature_max = 0;
-  /// |H| percentiles 50, 90, 99 (the 90th is the scale the engine normalises by).
+  /// Feature value (larger |k|) percentiles 50, 90, 99 (the 90th is the scale the engine normalises by).
   double abs_curvature_p50 = 0, abs_curvature_p90 = 0, abs_curvature_p99 = 0;
+  std::string curvature_method;   ///< "jet" or "cotangent"
+  double noise = 0;               ///< estimated RMS noise along the normal, in local edge lengths
+  double curvature_radius = 0;    ///< jet radius used, local edge lengths (0: cotangent)
+  double crease_angle = 0;        ///< dihedral angle above which an edge is a crease, degrees
+  std::size_t crease_edges = 0;   ///< edges sharper than that
 };
 
 struct PreparedMesh {
@@ -56,17 +58,20 @@ struct PreparedMesh {
   std::vector<std::array<std::uint32_t, 3>> triangles;
   std::vector<Eigen::Vector3d> positions;       ///< copy of the points for cache-friendly access
   std::vector<Eigen::Vector3d> vertex_normals;  ///< angle-weighted, unit length (zero when isolated)
-  /// Signed mean curvature H per vertex (cotangent formula, mixed Voronoi areas; Meyer et al. 2003,
-  /// the discrete mean curvature the paper cites). Positive on convex ridges with outward normals;
-  /// 1/r on a sphere of radius r. Boundary vertices take the mean of their interior neighbours.
-  std::vector<double> mean_curvature;
+  /// Curvature and the feature field (see engine/curvature.h): curvature.mean is the signed mean
+  /// curvature H (cotangent formula, mixed Voronoi areas; Meyer et al. 2003, the discrete mean
+  /// curvature the paper cites), positive on convex ridges, 1/r on a sphere of radius r;
+  /// curvature.k_max / k_min the principal curvatures every engine stage reads; curvature.crease
+  /// the sharp edges, parallel to `neighbors`.
+  CurvatureField curvature;
   /// Vertex adjacency in compressed rows: neighbours of v are
   /// neighbors[neighbor_offsets[v] .. neighbor_offsets[v+1]).
   std::vector<std::uint32_t> neighbor_offsets;
   std::vector<std::uint32_t> neighbors;
   std::vector<double> neighbor_edge_lengths;  ///< parallel to `neighbors`
   std::vector<std::int32_t> component;        ///< component id per vertex, -1 for unreferenced vertices
-  /// Reference curvature magnitude: the 90th percentile of |H| (never zero). Engine stages
+  /// Reference curvature magnitude: the 90th percentile of the feature value (the larger |k|;
+  /// never zero). Engine stages
   /// measure curvature in units of this, so options do not depend on the mesh's scale.
   double curvature_scale = 1;
   MeshStatistics statistics;
@@ -81,11 +86,5 @@ struct PreparedMesh {
 /// Builds the prepared mesh from a raw triangle soup.
 /// \throw GeometryError when no usable triangle remains.
 std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options = {});
-
-/// The signed mean curvature of every vertex (exposed for tests and tools).
-std::vector<double> compute_mean_curvature(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& normals);
-
-/// Angle-weighted unit vertex normals.
-std::vector<Eigen::Vector3d> compute_vertex_normals(const TriMesh& mesh);
 
 }  // namespace featureline

@@ -262,9 +262,7 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
   // Potential |C|^p per strip vertex (Eq. 13 with the exponent of Eq. 15).
   std::vector<double> potential(nv, 0.0);
   for (std::size_t v = 0; v < nv; ++v) {
-    const double h = pm.mean_curvature[strip.vertices[v]] / pm.curvature_scale;
-    double s = o.feature_sign == 0 ? std::abs(h) : std::max(0.0, o.feature_sign * h);
-    s = std::min(s, o.curvature_cap);
+    const double s = std::min(feature_value(pm.curvature, strip.vertices[v], o.feature_sign) / pm.curvature_scale, o.curvature_cap);
     potential[v] = std::pow(s, o.exponent);
   }
   // Gradient of the barycentric interpolant, constant per triangle (scaled coordinates).

@@ -407,7 +407,7 @@ struct FeaturelineServer::Impl {
 
   void curvature(const httplib::Request& req, httplib::Response& res) {
     auto session = session_or_404(req.matches[1]);
-    const auto& h = session->mesh->mean_curvature;
+    const auto& h = session->mesh->curvature.mean;
     if (accepts(req, "application/octet-stream")) {
       static_assert(sizeof(float) == 4, "float32 output");
       std::string bytes(h.size() * 4, '\0');

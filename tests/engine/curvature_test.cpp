@@ -27,7 +27,7 @@ double median(std::vector<double> v) {
 TEST(Curvature, IcosphereIsOneOverRadius) {
   for (double r : {0.5, 1.0, 7.0}) {
     const auto mesh = prepare_mesh(make_icosphere(r, 4));
-    for (double h : mesh->mean_curvature) EXPECT_NEAR(h * r, 1.0, 0.01) << "radius " << r;
+    for (double h : mesh->curvature.mean) EXPECT_NEAR(h * r, 1.0, 0.01) << "radius " << r;
   }
 }
 
@@ -36,14 +36,14 @@ TEST(Curvature, StableUnderScalingByMillion) {
   for (double s : {1e-6, 1e6}) {
     const auto mesh = prepare_mesh(scaled(make_icosphere(1.0, 3), s));
     for (std::size_t v = 0; v < unit->n_vertices(); ++v)
-      EXPECT_NEAR(mesh->mean_curvature[v] * s, unit->mean_curvature[v], 1e-9) << "scale " << s;
+      EXPECT_NEAR(mesh->curvature.mean[v] * s, unit->curvature.mean[v], 1e-9) << "scale " << s;
     EXPECT_NEAR(mesh->curvature_scale * s, unit->curvature_scale, 1e-9);
   }
 }
 
 TEST(Curvature, IrregularUvSphereMedianIsOneOverRadius) {
   const auto mesh = prepare_mesh(make_uv_sphere(2.0, 40, 64));
-  EXPECT_NEAR(median(mesh->mean_curvature), 0.5, 0.01);
+  EXPECT_NEAR(median(mesh->curvature.mean), 0.5, 0.01);
 }
 
 TEST(Curvature, SignFollowsOutwardNormals) {
@@ -51,19 +51,19 @@ TEST(Curvature, SignFollowsOutwardNormals) {
   auto raw = make_icosphere(1.0, 2);
   for (auto& t : raw.triangles) std::swap(t[1], t[2]);
   const auto mesh = prepare_mesh(raw);
-  for (double h : mesh->mean_curvature) EXPECT_NEAR(h, -1.0, 0.02);
+  for (double h : mesh->curvature.mean) EXPECT_NEAR(h, -1.0, 0.02);
 }
 
 TEST(Curvature, CylinderSideIsOneOverTwoRadius) {
   const double r = 0.5;
   const auto mesh = prepare_mesh(make_cylinder(r, 4.0, 40, 48, false));
   // Rings away from the open ends (boundary vertices borrow from their neighbours).
-  for (std::uint32_t v = 48 * 5; v < 48 * 36; ++v) EXPECT_NEAR(mesh->mean_curvature[v], 1.0 / (2 * r), 0.02);
+  for (std::uint32_t v = 48 * 5; v < 48 * 36; ++v) EXPECT_NEAR(mesh->curvature.mean[v], 1.0 / (2 * r), 0.02);
 }
 
 TEST(Curvature, PlaneIsZero) {
   const auto mesh = prepare_mesh(make_plane_grid(20, 0.2, 3));
-  for (double h : mesh->mean_curvature) EXPECT_NEAR(h, 0.0, 1e-9);
+  for (double h : mesh->curvature.mean) EXPECT_NEAR(h, 0.0, 1e-9);
 }
 
 TEST(Curvature, SmoothingPassesReduceNoise) {
@@ -75,12 +75,13 @@ TEST(Curvature, SmoothingPassesReduceNoise) {
   }
   auto spread = [](const PreparedMesh& m) {
     double sum = 0;
-    for (double h : m.mean_curvature) sum += (h - 1) * (h - 1);
-    return std::sqrt(sum / double(m.mean_curvature.size()));
+    for (double h : m.curvature.k_max) sum += (h - 1) * (h - 1);
+    return std::sqrt(sum / double(m.curvature.k_max.size()));
   };
-  PrepareOptions smooth;
-  smooth.curvature_smoothing_passes = 4;
-  EXPECT_LT(spread(*prepare_mesh(raw, smooth)), 0.5 * spread(*prepare_mesh(raw)));
+  PrepareOptions raw_field, smooth;
+  raw_field.curvature.method = smooth.curvature.method = CurvatureMethod::cotangent;
+  smooth.curvature.smoothing_passes = 4;
+  EXPECT_LT(spread(*prepare_mesh(raw, smooth)), 0.5 * spread(*prepare_mesh(raw, raw_field)));
 }
 
 TEST(PrepareMesh, StatisticsOfKnownShapes) {

@@ -1,0 +1,530 @@
+// Accuracy of the initial and the refined line against known answers, clean and noisy (issue 9:
+// the refined line must never be worse than the initial one on noisy scans and CAD creases).
+//
+// Cases:
+//   ridge / valley n=N   make_ridge_field(n, jitter 0.2, seed, +-0.3, width 0.25, bend 0.3); one
+//                        line through the crest's nearest vertices at x = -0.8, 0, 0.8 (picked on
+//                        the clean mesh; the noisy mesh keeps the ids); truth: distance_to_crest
+//                        in xy; unit: the grid spacing 2/(n-1).
+//   slab skinny|fine, corner / loop
+//                        make_rounded_slab: per corner an open line along the top outline over
+//                        about a quarter of the loop (keys: both ends and the corner's middle),
+//                        and a closed line round the whole top outline (4 keys); truth: the clean
+//                        top outline, closed; unit: its mean edge length.
+//   fandisk.off, ...     every chain of >= 10 edges that find_crease_chains(30 degrees) finds on
+//                        the clean mesh: keys its first, middle and last vertex (closed chains: 3
+//                        keys spread round, a closed line); truth: the clean chain; unit: the
+//                        mean length of its edges.
+// Noise: with_noise, the RMS displacement given in % of the case's unit (grid spacing; slab
+// outline edge, because the skinny slab's mean edge is dominated by its long cap diagonals), and
+// for the real CAD meshes in % of the mesh's mean edge length (one noisy mesh serves all chains).
+//
+// Distances are in units of the case's unit. A line's mean distance is its arc-length mean
+// (Simpson's rule on each segment: ends and midpoint), its max the largest of those samples.
+// Columns: mean/max of the initial and the refined line (mean over lines of a line's mean; max
+// over lines of a line's max); ratio = refined mean / initial mean of the row; worse = lines whose
+// refined mean exceeds the initial mean by more than 0.001 units; turn = total turning of the
+// refined line (rad, mean over lines); fallbk = marching fallbacks (segments, summed); iters =
+// snake iterations per line (mean); ms = detect_feature_line's total per line (median); err =
+// lines that threw.
+//
+// usage: bench_accuracy [--seeds N] [--quick] [--variant NAME] [--worst K]
+//   --seeds N       seeds for jitter and noise (default 3)
+//   --quick         fields n = 51 and 111 only, one seed, fandisk.off only (a few seconds)
+//   --variant NAME  run one variant of the table below
+//   --worst K       list the K lines where refining made the line worst (default 12)
+// The default run (fields n = 51, 111, 201, 351, i.e. 5k to 245k triangles) takes about 30 s here.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "engine/feature_line.h"
+#include "engine/mesh_io.h"
+#include "engine/prepared_mesh.h"
+#include "tests/support/accuracy_meshes.h"
+#include "tests/support/line_metrics.h"
+#include "tests/support/synthetic_meshes.h"
+
+namespace {
+
+using namespace featureline;
+using namespace featureline::testing;
+
+// ---------------------------------------------------------------------------------
+// Variants: one line each.
+// ---------------------------------------------------------------------------------
+
+struct Variant {
+  std::string name;
+  PrepareOptions prepare;
+  FeatureLineOptions line;
+};
+
+Variant variant(std::string name, const std::function<void(PrepareOptions&, FeatureLineOptions&)>& edit) {
+  Variant v{std::move(name), {}, {}};
+  edit(v.prepare, v.line);
+  return v;
+}
+
+std::vector<Variant> all_variants() {
+  return {
+      variant("default (jet, auto radius)", [](PrepareOptions&, FeatureLineOptions&) {}),
+      variant("cotangent (paper)", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.method = CurvatureMethod::cotangent; }),
+      variant("cotangent, smoothing 3", [](PrepareOptions& p, FeatureLineOptions&) {
+        p.curvature.method = CurvatureMethod::cotangent;
+        p.curvature.smoothing_passes = 3;
+      }),
+      variant("marching", [](PrepareOptions&, FeatureLineOptions& o) { o.initial.method = InitialMethod::marching; }),
+  };
+}
+
+// Meshes are prepared once per distinct PrepareOptions: list every field here.
+std::string prepare_key(const PrepareOptions& p) {
+  const auto& c = p.curvature;
+  return to_string(c.method) + " r=" + std::to_string(c.radius) + " s=" + std::to_string(c.smoothing_passes) +
+         " a=" + std::to_string(c.crease_angle);
+}
+
+// ---------------------------------------------------------------------------------
+// Cases
+// ---------------------------------------------------------------------------------
+
+struct LineSpec {
+  std::vector<std::uint32_t> keys;
+  bool closed = false;
+  std::function<double(const Eigen::Vector3d&)> distance;  ///< to the truth, in units
+};
+
+/// One clean mesh with its lines (a case at one seed).
+struct Scenario {
+  RawMesh mesh;
+  double noise_reference = 1;  ///< the length the noise % refers to
+  std::vector<LineSpec> lines;
+};
+
+struct Case {
+  std::string name;
+  std::string group;         ///< "smooth" or "cad"
+  bool seeded_mesh = false;  ///< the clean mesh depends on the seed (otherwise one clean run)
+  std::vector<double> noise_levels;
+  std::function<Scenario(std::uint64_t seed)> build;
+};
+
+Case ridge_case(bool ridge, int n, const std::vector<double>& noise) {
+  Case c;
+  c.name = std::string(ridge ? "ridge" : "valley") + " n=" + std::to_string(n);
+  c.group = "smooth";
+  c.seeded_mesh = true;
+  c.noise_levels = noise;
+  c.build = [ridge, n](std::uint64_t seed) {
+    auto field = std::make_shared<HeightField>(make_ridge_field(n, 0.2, seed, ridge ? 0.3 : -0.3, 0.25, 0.3));
+    Scenario s;
+    s.mesh = field->mesh;
+    s.noise_reference = field->spacing;
+    LineSpec line;
+    for (double x : {-0.8, 0.0, 0.8}) line.keys.push_back(nearest_vertex(field->mesh, x, field->crest(x)));
+    line.distance = [field](const Eigen::Vector3d& p) { return distance_to_crest(*field, p.x(), p.y()) / field->spacing; };
+    s.lines.push_back(std::move(line));
+    return s;
+  };
+  return c;
+}
+
+LineSpec chain_line(const RawMesh& mesh, const std::vector<std::uint32_t>& chain, bool closed,
+                    std::vector<std::uint32_t> keys, bool line_closed) {
+  auto truth = std::make_shared<std::vector<Eigen::Vector3d>>(positions_of(mesh, chain));
+  double length = 0;
+  const std::size_t edges = closed ? truth->size() : truth->size() - 1;
+  for (std::size_t i = 0; i < edges; ++i) length += ((*truth)[(i + 1) % truth->size()] - (*truth)[i]).norm();
+  const double unit = length / double(edges);
+  LineSpec line;
+  line.keys = std::move(keys);
+  line.closed = line_closed;
+  line.distance = [truth, closed, unit](const Eigen::Vector3d& p) { return distance_to_polyline(*truth, closed, p) / unit; };
+  return line;
+}
+
+Case slab_case(SlabTessellation tessellation, bool loop) {
+  Case c;
+  c.name = std::string("slab ") + (tessellation == SlabTessellation::skinny ? "skinny" : "fine") + (loop ? ", loop" : ", corner");
+  c.group = "cad";
+  c.noise_levels = {0, 10};
+  c.build = [tessellation, loop](std::uint64_t) {
+    RoundedSlabOptions options;
+    options.tessellation = tessellation;
+    const CadPart part = make_rounded_slab(options);
+    const auto& top = part.top_outline;
+    const std::size_t n = top.size();
+    Scenario s;
+    s.mesh = part.mesh;
+    if (loop) {
+      s.lines.push_back(chain_line(part.mesh, top, true, {top[0], top[n / 4], top[n / 2], top[3 * n / 4]}, true));
+    } else {
+      const double a = options.half_x, b = options.half_y, r = options.corner_radius;
+      for (double sx : {1.0, -1.0})
+        for (double sy : {1.0, -1.0}) {
+          // The outline vertex nearest the middle of this corner's arc.
+          const Eigen::Vector3d mid(sx * (a - r + r * std::sqrt(0.5)), sy * (b - r + r * std::sqrt(0.5)), options.height);
+          std::size_t corner = 0;
+          double best = 1e300;
+          for (std::size_t i = 0; i < n; ++i) {
+            const auto& p = part.mesh.positions[top[i]];
+            const double d = (Eigen::Vector3d(p[0], p[1], p[2]) - mid).norm();
+            if (d < best) best = d, corner = i;
+          }
+          const std::size_t half = n / 8;
+          s.lines.push_back(chain_line(part.mesh, top, true, {top[(corner + n - half) % n], top[corner], top[(corner + half) % n]}, false));
+        }
+    }
+    const auto outline = positions_of(part.mesh, top);
+    double length = 0;
+    for (std::size_t i = 0; i < n; ++i) length += (outline[(i + 1) % n] - outline[i]).norm();
+    s.noise_reference = length / double(n);  // the outline's mean edge
+    return s;
+  };
+  return c;
+}
+
+std::string shared_mesh(const std::string& name) { return std::string(FEATURELINE_SHARED_DIR) + "/data/meshes/" + name; }
+
+Case cad_case(const std::string& file) {
+  Case c;
+  c.name = file;
+  c.group = "cad";
+  c.noise_levels = {0, 10};
+  auto cache = std::make_shared<std::unique_ptr<Scenario>>();
+  c.build = [file, cache](std::uint64_t) {
+    if (!*cache) {
+      auto s = std::make_unique<Scenario>();
+      s->mesh = read_mesh_file(shared_mesh(file));
+      s->noise_reference = mean_edge_length(s->mesh);
+      for (const auto& chain : find_crease_chains(s->mesh, 30, 10)) {
+        const auto& v = chain.vertices;
+        const std::size_t n = v.size();
+        if (chain.closed)
+          s->lines.push_back(chain_line(s->mesh, v, true, {v[0], v[n / 3], v[2 * n / 3]}, true));
+        else
+          s->lines.push_back(chain_line(s->mesh, v, false, {v.front(), v[n / 2], v.back()}, false));
+      }
+      *cache = std::move(s);
+    }
+    return **cache;
+  };
+  return c;
+}
+
+// ---------------------------------------------------------------------------------
+// Measures
+// ---------------------------------------------------------------------------------
+
+struct Distance {
+  double mean = 0, max = 0;
+};
+
+// Arc-length mean (Simpson's rule per segment) and max of the distance along a polyline.
+Distance line_distance(const std::vector<Eigen::Vector3d>& points, bool closed,
+                       const std::function<double(const Eigen::Vector3d&)>& distance) {
+  Distance d;
+  if (points.empty()) return d;
+  std::vector<double> at(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    at[i] = distance(points[i]);
+    d.max = std::max(d.max, at[i]);
+  }
+  const std::size_t segments = points.size() < 2 ? 0 : (closed ? points.size() : points.size() - 1);
+  double length = 0, integral = 0;
+  for (std::size_t s = 0; s < segments; ++s) {
+    const std::size_t t = (s + 1) % points.size();
+    const double l = (points[t] - points[s]).norm();
+    if (l == 0) continue;
+    const double mid = distance(0.5 * (points[s] + points[t]));
+    d.max = std::max(d.max, mid);
+    integral += l * (at[s] + 4 * mid + at[t]) / 6;
+    length += l;
+  }
+  if (length > 0) {
+    d.mean = integral / length;
+  } else {
+    for (double x : at) d.mean += x;
+    d.mean /= double(at.size());
+  }
+  return d;
+}
+
+double closed_turning(std::vector<Eigen::Vector3d> points, bool closed) {
+  if (closed && points.size() >= 3) {
+    points.push_back(points[0]);
+    points.push_back(points[1]);
+  }
+  return total_turning(points);
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+constexpr double kWorseTolerance = 1e-3;
+
+struct LineOutcome {
+  std::uint64_t seed = 0;
+  std::vector<std::uint32_t> keys;
+  bool failed = false;
+  std::string error;
+  Distance initial, refined;
+  double turning = 0, ms = 0;
+  int iterations = 0;
+  std::size_t fallbacks = 0;
+  bool worse() const { return !failed && refined.mean > initial.mean + kWorseTolerance; }
+};
+
+struct Row {
+  std::size_t triangles = 0;
+  std::vector<LineOutcome> lines;
+};
+
+struct RowKey {
+  std::size_t case_index, noise_index, variant_index;
+  bool operator<(const RowKey& o) const {
+    return std::tie(case_index, noise_index, variant_index) < std::tie(o.case_index, o.noise_index, o.variant_index);
+  }
+};
+
+struct RowSummary {
+  std::size_t lines = 0, ok = 0, worse = 0, failed = 0, fallbacks = 0;
+  double initial_mean = 0, initial_max = 0, refined_mean = 0, refined_max = 0, turning = 0, iterations = 0, ms = 0;
+};
+
+RowSummary summarize(const Row& row) {
+  RowSummary s;
+  std::vector<double> ms;
+  for (const auto& l : row.lines) {
+    ++s.lines;
+    if (l.failed) {
+      ++s.failed;
+      continue;
+    }
+    ++s.ok;
+    s.initial_mean += l.initial.mean;
+    s.refined_mean += l.refined.mean;
+    s.initial_max = std::max(s.initial_max, l.initial.max);
+    s.refined_max = std::max(s.refined_max, l.refined.max);
+    s.turning += l.turning;
+    s.iterations += l.iterations;
+    s.fallbacks += l.fallbacks;
+    s.worse += l.worse();
+    ms.push_back(l.ms);
+  }
+  if (s.ok) {
+    s.initial_mean /= double(s.ok);
+    s.refined_mean /= double(s.ok);
+    s.turning /= double(s.ok);
+    s.iterations /= double(s.ok);
+  }
+  s.ms = median(ms);
+  return s;
+}
+
+std::string ratio_text(double refined, double initial) {
+  char buffer[32];
+  // A line exactly on the truth (clean creases) has mean 0 up to rounding: no ratio then.
+  if (initial > kWorseTolerance) std::snprintf(buffer, sizeof buffer, "%.2f", refined / initial);
+  else std::snprintf(buffer, sizeof buffer, refined > kWorseTolerance ? "inf" : "-");
+  return buffer;
+}
+
+using Clock = std::chrono::steady_clock;
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int seeds = 3, worst_count = 12;
+  bool quick = false;
+  std::string only;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--seeds" && i + 1 < argc) seeds = std::max(1, std::atoi(argv[++i]));
+    else if (arg == "--quick") quick = true;
+    else if (arg == "--variant" && i + 1 < argc) only = argv[++i];
+    else if (arg == "--worst" && i + 1 < argc) worst_count = std::max(0, std::atoi(argv[++i]));
+    else {
+      std::fprintf(stderr, "usage: bench_accuracy [--seeds N] [--quick] [--variant NAME] [--worst K]\n"
+                           "  --quick    n=51 and 111 fields, one seed, fandisk only\n");
+      return 2;
+    }
+  }
+  std::vector<Variant> variants;
+  for (auto& v : all_variants())
+    if (only.empty() || v.name == only) variants.push_back(std::move(v));
+  if (variants.empty()) {
+    std::fprintf(stderr, "unknown variant '%s'; variants:\n", only.c_str());
+    for (const auto& v : all_variants()) std::fprintf(stderr, "  %s\n", v.name.c_str());
+    return 2;
+  }
+  if (quick) seeds = 1;
+
+  std::vector<Case> cases;
+  // About 5k, 24k, 80k and 245k triangles; the whole default run stays well under 3 minutes.
+  const std::vector<int> sizes = quick ? std::vector<int>{51, 111} : std::vector<int>{51, 111, 201, 351};
+  for (bool ridge : {true, false})
+    for (int n : sizes) cases.push_back(ridge_case(ridge, n, {0, 10, 20, 30}));
+  for (auto t : {SlabTessellation::skinny, SlabTessellation::fine})
+    for (bool loop : {false, true}) cases.push_back(slab_case(t, loop));
+  const std::vector<std::string> cad_files =
+      quick ? std::vector<std::string>{"fandisk.off"}
+            : std::vector<std::string>{"fandisk.off", "fandisk_aimatshape.off", "rocker-arm.obj", "wingnut.obj"};
+  for (const auto& file : cad_files) {
+    const std::string path = shared_mesh(file);
+    if (!std::ifstream(path)) {
+      std::fprintf(stderr, "missing test mesh %s (expected beside the repository in ../shared/data/meshes)\n", path.c_str());
+      return 1;
+    }
+    cases.push_back(cad_case(file));
+  }
+
+  const auto started = Clock::now();
+  std::map<RowKey, Row> rows;
+  std::map<std::string, std::size_t> chains_per_mesh;
+  for (std::size_t ci = 0; ci < cases.size(); ++ci) {
+    const Case& c = cases[ci];
+    for (std::size_t ni = 0; ni < c.noise_levels.size(); ++ni) {
+      const double noise = c.noise_levels[ni];
+      const int runs = (noise == 0 && !c.seeded_mesh) ? 1 : seeds;  // a clean fixed mesh needs one run
+      for (int seed = 1; seed <= runs; ++seed) {
+        const Scenario scenario = c.build(std::uint64_t(seed));
+        if (c.group == "cad" && c.name.rfind("slab", 0) != 0) chains_per_mesh[c.name] = scenario.lines.size();
+        const double fraction = noise / 100 * scenario.noise_reference / mean_edge_length(scenario.mesh);
+        const RawMesh noisy = with_noise(scenario.mesh, fraction, 1000003ull * std::uint64_t(seed) + 7);
+        std::map<std::string, std::shared_ptr<const PreparedMesh>> prepared;
+        for (std::size_t vi = 0; vi < variants.size(); ++vi) {
+          const Variant& v = variants[vi];
+          auto& mesh = prepared[prepare_key(v.prepare)];
+          if (!mesh) mesh = prepare_mesh(noisy, v.prepare);
+          Row& row = rows[{ci, ni, vi}];
+          row.triangles = mesh->statistics.faces;
+          for (const auto& spec : scenario.lines) {
+            LineOutcome out;
+            out.seed = std::uint64_t(seed);
+            out.keys = spec.keys;
+            FeatureLineRequest request;
+            request.keys = spec.keys;
+            request.closed = spec.closed;
+            request.options = v.line;
+            try {
+              const auto r = detect_feature_line(*mesh, request);
+              const auto refined = refined_positions(r);
+              out.initial = line_distance(r.initial_points, r.closed, spec.distance);
+              out.refined = line_distance(refined, r.closed, spec.distance);
+              out.turning = closed_turning(refined, r.closed);
+              out.iterations = r.iterations;
+              out.fallbacks = r.initial.fallbacks.size();
+              out.ms = r.timings.total_ms;
+            } catch (const std::exception& e) {
+              out.failed = true;
+              out.error = e.what();
+            }
+            row.lines.push_back(std::move(out));
+          }
+        }
+      }
+    }
+  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
+
+  std::printf("# bench_accuracy: %d seed%s, fields n = ", seeds, seeds == 1 ? "" : "s");
+  for (std::size_t i = 0; i < sizes.size(); ++i) std::printf("%s%d", i ? ", " : "", sizes[i]);
+  std::printf("\n\nCrease chains of >= 10 edges (find_crease_chains, 30 degrees):");
+  for (const auto& [name, count] : chains_per_mesh) std::printf(" %s %zu;", name.c_str(), count);
+  std::printf("\n\nDistances in units (grid spacing / truth chain's mean edge); noise: RMS displacement in %% of the\n"
+              "grid spacing (fields), outline edge (slab) or mesh mean edge (real CAD); worse: refined mean >\n"
+              "initial mean + %.3f.\n\n", kWorseTolerance);
+  std::printf("| variant | case | triangles | noise %% | lines | init mean | init max | ref mean | ref max | ref/init | worse | turn | fallbk | iters | ms | err |\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const auto& [key, row] : rows) {
+    const RowSummary s = summarize(row);
+    std::printf("| %s | %s | %zu | %.0f | %zu | %.3f | %.3f | %.3f | %.3f | %s | %zu | %.2f | %zu | %.0f | %.2f | %zu |\n",
+                variants[key.variant_index].name.c_str(), cases[key.case_index].name.c_str(), row.triangles,
+                cases[key.case_index].noise_levels[key.noise_index], s.lines, s.initial_mean, s.initial_max,
+                s.refined_mean, s.refined_max, ratio_text(s.refined_mean, s.initial_mean).c_str(), s.worse, s.turning,
+                s.fallbacks, s.iterations, s.ms, s.failed);
+  }
+
+  std::printf("\n## Summary per variant\n\n");
+  std::printf("| variant | smooth: worst clean ref mean | smooth: worst noisy (10-20%%) ref mean | smooth: worse lines |"
+              " CAD: worst clean ref mean | CAD: noisy ref/init | CAD: worse lines | errors |\n");
+  std::printf("|---|---|---|---:|---|---:|---:|---:|\n");
+  for (std::size_t vi = 0; vi < variants.size(); ++vi) {
+    double smooth_clean = -1, smooth_noisy = -1, cad_clean = -1, cad_noisy_ref = 0, cad_noisy_init = 0;
+    std::string smooth_clean_case, smooth_noisy_case, cad_clean_case;
+    std::size_t smooth_worse = 0, smooth_lines = 0, cad_worse = 0, cad_lines = 0, errors = 0;
+    for (const auto& [key, row] : rows) {
+      if (key.variant_index != vi) continue;
+      const Case& c = cases[key.case_index];
+      const double noise = c.noise_levels[key.noise_index];
+      const RowSummary s = summarize(row);
+      errors += s.failed;
+      const std::string label = c.name + " @" + std::to_string(int(noise)) + "%";
+      if (c.group == "smooth") {
+        smooth_worse += s.worse, smooth_lines += s.lines;
+        if (noise == 0 && s.refined_mean > smooth_clean) smooth_clean = s.refined_mean, smooth_clean_case = label;
+        if (noise >= 10 && noise <= 20 && s.refined_mean > smooth_noisy) smooth_noisy = s.refined_mean, smooth_noisy_case = label;
+      } else {
+        cad_worse += s.worse, cad_lines += s.lines;
+        if (noise == 0 && s.refined_mean > cad_clean) cad_clean = s.refined_mean, cad_clean_case = label;
+        if (noise > 0)
+          for (const auto& l : row.lines)
+            if (!l.failed) cad_noisy_ref += l.refined.mean, cad_noisy_init += l.initial.mean;
+      }
+    }
+    std::printf("| %s | %.3f (%s) | %.3f (%s) | %zu/%zu | %.3f (%s) | %s | %zu/%zu | %zu |\n", variants[vi].name.c_str(),
+                smooth_clean, smooth_clean_case.c_str(), smooth_noisy, smooth_noisy_case.c_str(), smooth_worse,
+                smooth_lines, cad_clean, cad_clean_case.c_str(), ratio_text(cad_noisy_ref, cad_noisy_init).c_str(),
+                cad_worse, cad_lines, errors);
+  }
+
+  if (worst_count > 0) {
+    struct Worst {
+      double excess;
+      std::string text;
+    };
+    std::vector<Worst> worst;
+    for (const auto& [key, row] : rows)
+      for (const auto& l : row.lines) {
+        if (l.failed || !l.worse()) continue;
+        std::string keys;
+        for (auto k : l.keys) keys += (keys.empty() ? "" : ",") + std::to_string(k);
+        char buffer[512];
+        std::snprintf(buffer, sizeof buffer, "| %s | %s | %.0f | %llu | %s | %.3f | %.3f | %.3f | %.3f |",
+                      variants[key.variant_index].name.c_str(), cases[key.case_index].name.c_str(),
+                      cases[key.case_index].noise_levels[key.noise_index], static_cast<unsigned long long>(l.seed),
+                      keys.c_str(), l.initial.mean, l.refined.mean, l.initial.max, l.refined.max);
+        worst.push_back({l.refined.mean - l.initial.mean, buffer});
+      }
+    std::sort(worst.begin(), worst.end(), [](const Worst& a, const Worst& b) { return a.excess > b.excess; });
+    std::printf("\n## Lines where the refined line is worse (largest excess first, at most %d of %zu)\n\n", worst_count,
+                worst.size());
+    std::printf("| variant | case | noise %% | seed | keys | init mean | ref mean | init max | ref max |\n");
+    std::printf("|---|---|---:|---:|---|---:|---:|---:|---:|\n");
+    for (std::size_t i = 0; i < worst.size() && i < std::size_t(worst_count); ++i) std::printf("%s\n", worst[i].text.c_str());
+    for (const auto& [key, row] : rows)
+      for (const auto& l : row.lines)
+        if (l.failed)
+          std::printf("error: %s, %s, noise %.0f%%, seed %llu: %s\n", variants[key.variant_index].name.c_str(),
+                      cases[key.case_index].name.c_str(), cases[key.case_index].noise_levels[key.noise_index],
+                      static_cast<unsigned long long>(l.seed), l.error.c_str());
+  }
+  std::printf("\n%.1f s\n", seconds);
+  return 0;
+}

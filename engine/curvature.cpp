@@ -1,0 +1,388 @@
+#include "engine/curvature.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <thread>
+
+#include "engine/errors.h"
+
+namespace featureline {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+Eigen::Vector3d to_eigen(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
+
+double median_of(std::vector<double> values) {
+  if (values.empty()) return 0;
+  const auto mid = values.begin() + std::ptrdiff_t(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
+// Runs body(begin, end) over [0, n) on up to hardware-concurrency threads (the fits are
+// independent per vertex and dominate preparation time on large meshes).
+template <typename Body>
+void parallel_ranges(std::size_t n, Body body) {
+  const std::size_t threads = std::clamp<std::size_t>(std::thread::hardware_concurrency(), 1, 8);
+  if (threads == 1 || n < 4096) return body(std::size_t(0), n);
+  std::vector<std::thread> pool;
+  const std::size_t chunk = (n + threads - 1) / threads;
+  for (std::size_t t = 1; t < threads; ++t) {
+    const std::size_t begin = std::min(n, t * chunk), end = std::min(n, begin + chunk);
+    pool.emplace_back([=] { body(begin, end); });
+  }
+  body(0, std::min(n, chunk));
+  for (auto& thread : pool) thread.join();
+}
+
+struct JetFit {
+  double k_max = 0, k_min = 0;
+  double residual = 0;  ///< weighted RMS of the fit's residuals, length units
+  bool ok = false;
+};
+
+// Gathers the vertices within `radius` of v reachable through vertices that are themselves
+// within it (a breadth-first search over edges, so the other side of a thin part is not
+// mixed in). The search does not continue past crease vertices (other than v), so a smooth
+// patch is fitted on its own: the centre of a CAD cap fan sees its flat cap and rim, not the
+// side beyond the rim. `stamp` marks visited vertices with `generation`.
+void gather(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, const std::vector<char>& on_crease,
+            std::uint32_t v, double radius, std::vector<std::uint32_t>& stamp, std::uint32_t generation,
+            std::vector<std::uint32_t>& out) {
+  out.assign(1, v);
+  stamp[v] = generation;
+  const double r2 = radius * radius;
+  for (std::size_t head = 0; head < out.size(); ++head) {
+    const auto a = out[head];
+    if (head > 0 && on_crease[a]) continue;
+    for (auto k = adj.offsets[a]; k < adj.offsets[a + 1]; ++k) {
+      const auto w = adj.neighbors[k];
+      if (stamp[w] == generation) continue;
+      stamp[w] = generation;
+      if ((P[w] - P[v]).squaredNorm() <= r2) out.push_back(w);
+    }
+  }
+}
+
+// Weighted least-squares fit of the height h = c0 + c1 u + c2 w + c3 u^2 + c4 uw + c5 w^2 over
+// the neighbourhood, in a frame whose z axis is the neighbourhood's mean normal, coordinates
+// scaled by the radius for conditioning. The principal curvatures are the eigenvalues of the
+// graph's shape operator I^-1 II at the origin, so a tilted frame is corrected by c1, c2.
+JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N, std::uint32_t v,
+               const std::vector<std::uint32_t>& hood, double radius) {
+  JetFit fit;
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  const double inv_r = 1.0 / radius;
+  for (auto w : hood) n += std::exp(-2 * (P[w] - P[v]).squaredNorm() * inv_r * inv_r) * N[w];
+  if (!(n.norm() > 1e-12)) n = N[v];
+  if (!(n.norm() > 1e-12)) return fit;
+  n.normalize();
+  const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+  Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+  double weight_sum = 0, hh = 0;
+  for (auto w : hood) {
+    const Eigen::Vector3d x = (P[w] - P[v]) * inv_r;
+    const double u = x.dot(t1), s = x.dot(t2), h = x.dot(n);
+    const double weight = std::exp(-2 * x.squaredNorm());  // Gaussian, sigma = radius / 2
+    Eigen::Matrix<double, 6, 1> row;
+    row << 1, u, s, u * u, u * s, s * s;
+    A.selfadjointView<Eigen::Lower>().rankUpdate(row, weight);
+    b += weight * h * row;
+    weight_sum += weight;
+    hh += weight * h * h;
+  }
+  const Eigen::Matrix<double, 6, 6> full = A.selfadjointView<Eigen::Lower>();
+  // A neighbourhood on a line or too few points leaves the quadric undetermined.
+  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(full);
+  const auto d = ldlt.vectorD();
+  if (ldlt.info() != Eigen::Success || !(d.minCoeff() > 1e-9 * d.maxCoeff())) return fit;
+  const Eigen::Matrix<double, 6, 1> c = ldlt.solve(b);
+  const double c1 = c[1], c2 = c[2];
+  const double g = std::sqrt(1 + c1 * c1 + c2 * c2);
+  Eigen::Matrix2d first, second;
+  first << 1 + c1 * c1, c1 * c2, c1 * c2, 1 + c2 * c2;
+  second << 2 * c[3], c[4], c[4], 2 * c[5];
+  const Eigen::Matrix2d shape = first.inverse() * (second / g);
+  const double tr = shape.trace(), det = shape.determinant();
+  const double disc = std::sqrt(std::max(0.0, 0.25 * tr * tr - det));
+  // Height grows along the outward normal, so a convex surface bends to negative h: the
+  // convex-positive curvatures are the negated eigenvalues, back in length units.
+  fit.k_max = -(0.5 * tr - disc) * inv_r;
+  fit.k_min = -(0.5 * tr + disc) * inv_r;
+  const double residual2 = std::max(0.0, hh - c.dot(b)) / weight_sum;  // sum w r^2 = h'Wh - c'A c
+  fit.residual = std::sqrt(residual2) * radius;
+  fit.ok = std::isfinite(fit.k_max) && std::isfinite(fit.k_min);
+  return fit;
+}
+
+std::vector<double> local_edge_lengths(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj) {
+  std::vector<double> local(P.size(), 0.0);
+  for (std::size_t v = 0; v < P.size(); ++v) {
+    const auto begin = adj.offsets[v], end = adj.offsets[v + 1];
+    for (auto k = begin; k < end; ++k) local[v] += (P[adj.neighbors[k]] - P[v]).norm();
+    if (end > begin) local[v] /= double(end - begin);
+  }
+  return local;
+}
+
+// Fits every vertex at `radius` local edge lengths; vertices whose fit fails keep `fallback`.
+// Returns the per-vertex residuals in local edge lengths (negative where no fit was made).
+std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
+                            const AdjacencyView& adj, const std::vector<char>& on_crease,
+                            const std::vector<double>& local, double radius,
+                            const std::vector<double>& fallback, CurvatureField& field) {
+  const std::size_t n = P.size();
+  std::vector<double> residual(n, -1.0);
+  parallel_ranges(n, [&](std::size_t begin, std::size_t end) {
+    std::vector<std::uint32_t> stamp(n, 0), hood;
+    std::uint32_t generation = 0;
+    for (std::size_t v = begin; v < end; ++v) {
+      field.k_max[v] = field.k_min[v] = fallback[v];
+      if (!(local[v] > 0)) continue;
+      JetFit fit;
+      double r = radius * local[v];
+      // Too few points (coarse or skinny neighbourhoods) widen the radius a few times.
+      for (int attempt = 0; attempt < 4 && !fit.ok; ++attempt, r *= 1.5) {
+        gather(P, adj, on_crease, std::uint32_t(v), r, stamp, ++generation, hood);
+        if (hood.size() >= 8) fit = fit_jet(P, N, std::uint32_t(v), hood, r);
+      }
+      if (!fit.ok) continue;
+      field.k_max[v] = fit.k_max;
+      field.k_min[v] = fit.k_min;
+      residual[v] = fit.residual / local[v];
+    }
+  });
+  return residual;
+}
+
+// Dihedral angle of every adjacency entry's edge (0 on boundary edges) and the far corners of
+// its two faces (-1 on the boundary).
+struct EdgeAngles {
+  std::vector<double> angle;
+  std::vector<std::int32_t> corner_a, corner_b;
+};
+
+EdgeAngles dihedral_angles(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj) {
+  EdgeAngles out;
+  out.angle.assign(adj.neighbors.size(), 0.0);
+  out.corner_a.assign(adj.neighbors.size(), -1);
+  out.corner_b.assign(adj.neighbors.size(), -1);
+  for (std::uint32_t v = 0; v < P.size(); ++v)
+    for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
+      const auto w = adj.neighbors[k];
+      const auto he = mesh.find_halfedge(TriMesh::VertexHandle(int(v)), TriMesh::VertexHandle(int(w)));
+      if (!he.is_valid() || mesh.is_boundary(mesh.edge_handle(he))) continue;
+      const auto a = mesh.to_vertex_handle(mesh.next_halfedge_handle(he)).idx();
+      const auto b = mesh.to_vertex_handle(mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(he))).idx();
+      const Eigen::Vector3d e = P[w] - P[v];
+      const Eigen::Vector3d na = e.cross(P[std::size_t(a)] - P[v]);
+      const Eigen::Vector3d nb = (P[std::size_t(b)] - P[v]).cross(e);
+      if (!(na.norm() > 0) || !(nb.norm() > 0)) continue;
+      out.angle[k] = std::atan2(na.cross(nb).norm(), na.dot(nb));
+      out.corner_a[k] = a;
+      out.corner_b[k] = b;
+    }
+  return out;
+}
+
+double angle_of(const AdjacencyView& adj, const EdgeAngles& angles, std::uint32_t v, std::uint32_t w) {
+  for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k)
+    if (adj.neighbors[k] == w) return angles.angle[k];
+  return 0;
+}
+
+// An edge is a crease when its dihedral angle exceeds the threshold and stands out from its
+// faces' other four edges (the second largest of those under half its angle). A sharp bend
+// that crosses triangles instead of following edges spreads over a band of edges, none of
+// which is the crease; a CAD crease is one chain of edges between flat-ish faces (at a corner
+// one wing edge belongs to the other crease, hence the second largest). Convex when the far
+// corner of the second face lies below the first face's plane.
+void mark_creases(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, const EdgeAngles& angles,
+                  double angle_degrees, CurvatureField& field) {
+  field.crease.assign(adj.neighbors.size(), 0);
+  field.crease_edges = 0;
+  const double threshold = angle_degrees * kPi / 180;
+  for (std::uint32_t v = 0; v < P.size(); ++v)
+    for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
+      const double angle = angles.angle[k];
+      if (!(angle > threshold) || angles.corner_a[k] < 0) continue;
+      const auto w = adj.neighbors[k];
+      const auto a = std::uint32_t(angles.corner_a[k]), b = std::uint32_t(angles.corner_b[k]);
+      std::array<double, 4> wings = {angle_of(adj, angles, w, a), angle_of(adj, angles, a, v),
+                                     angle_of(adj, angles, v, b), angle_of(adj, angles, b, w)};
+      std::sort(wings.begin(), wings.end());
+      if (wings[2] >= 0.5 * angle) continue;
+      const Eigen::Vector3d na = (P[w] - P[v]).cross(P[a] - P[v]);
+      field.crease[k] = (P[b] - P[v]).dot(na) < 0 ? 1 : -1;
+      if (v < w) ++field.crease_edges;
+    }
+}
+
+}  // namespace
+
+std::string to_string(CurvatureMethod method) { return method == CurvatureMethod::jet ? "jet" : "cotangent"; }
+
+std::optional<CurvatureMethod> parse_curvature_method(const std::string& name) {
+  if (name == "jet") return CurvatureMethod::jet;
+  if (name == "cotangent") return CurvatureMethod::cotangent;
+  return std::nullopt;
+}
+
+CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& positions,
+                                       const std::vector<Eigen::Vector3d>& normals, const AdjacencyView& adjacency,
+                                       const CurvatureOptions& options) {
+  if (!(options.radius >= 0 && options.radius <= CurvatureLimits::max_radius))
+    throw InvalidInputError("curvature radius must be between 0 (automatic) and " +
+                            std::to_string(int(CurvatureLimits::max_radius)) + " edge lengths");
+  if (options.smoothing_passes < 0 || options.smoothing_passes > CurvatureLimits::max_smoothing_passes)
+    throw InvalidInputError("curvature smoothing passes must be between 0 and 100");
+  if (!(options.crease_angle <= CurvatureLimits::max_crease_angle))
+    throw InvalidInputError("crease angle must be at most 179 degrees (0: automatic, negative: none)");
+  CurvatureField field;
+  const std::size_t n = positions.size();
+  field.mean = compute_mean_curvature(mesh, normals);
+  field.k_max = field.mean;
+  field.k_min = field.mean;
+  const std::vector<double> local = local_edge_lengths(positions, adjacency);
+  // Creases: above 40 degrees, and well above the dihedral angles the noise makes on its own.
+  if (options.crease_angle >= 0) {
+    const EdgeAngles angles = dihedral_angles(mesh, positions, adjacency);
+    std::vector<double> interior;
+    for (std::size_t k = 0; k < angles.angle.size(); ++k)
+      if (angles.corner_a[k] >= 0) interior.push_back(angles.angle[k]);
+    const double noise_angle = 4 * median_of(interior) * 180 / kPi;
+    field.crease_angle = options.crease_angle > 0 ? options.crease_angle : std::max(40.0, noise_angle);
+    mark_creases(positions, adjacency, angles, field.crease_angle, field);
+  } else {
+    field.crease.assign(adjacency.neighbors.size(), 0);
+  }
+  std::vector<char>& on_crease = field.on_crease;
+  on_crease.assign(n, 0);
+  for (std::uint32_t v = 0; v < n; ++v)
+    for (auto k = adjacency.offsets[v]; k < adjacency.offsets[v + 1]; ++k)
+      if (field.crease[k] != 0) on_crease[v] = 1;
+  if (options.method == CurvatureMethod::jet) {
+    // Noise: the median residual of fits over two edge lengths (flat and smooth parts fit
+    // almost exactly, so what remains is the noise; creases are too few to move a median).
+    constexpr double kProbeRadius = 2;
+    std::vector<double> residual = fit_all(positions, normals, adjacency, on_crease, local, kProbeRadius, field.mean, field);
+    residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return r < 0; }), residual.end());
+    field.noise = median_of(residual);
+    // Wider neighbourhoods average noise away (the variance of a fitted curvature falls as
+    // radius^-6 at a fixed density) but blur features; grow the radius with the noise only.
+    field.radius = options.radius > 0 ? options.radius : std::clamp(2 + 30 * field.noise, kProbeRadius, 6.0);
+    if (field.radius != kProbeRadius) fit_all(positions, normals, adjacency, on_crease, local, field.radius, field.mean, field);
+  }
+  for (int pass = 0; pass < options.smoothing_passes; ++pass)
+    for (auto* values : {&field.k_max, &field.k_min}) {
+      std::vector<double> smoothed(*values);
+      for (std::uint32_t v = 0; v < n; ++v) {
+        const auto begin = adjacency.offsets[v], end = adjacency.offsets[v + 1];
+        if (begin == end) continue;
+        double sum = 0;
+        for (auto k = begin; k < end; ++k) sum += (*values)[adjacency.neighbors[k]];
+        smoothed[v] = 0.5 * ((*values)[v] + sum / double(end - begin));
+      }
+      values->swap(smoothed);
+    }
+  return field;
+}
+
+std::vector<Eigen::Vector3d> compute_vertex_normals(const TriMesh& mesh) {
+  std::vector<Eigen::Vector3d> normals(mesh.n_vertices(), Eigen::Vector3d::Zero());
+  for (auto f : mesh.faces()) {
+    Eigen::Vector3d p[3];
+    int idx[3];
+    int k = 0;
+    for (auto v : mesh.fv_range(f)) {
+      idx[k] = v.idx();
+      p[k++] = to_eigen(mesh.point(v));
+    }
+    Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+    const double len = n.norm();
+    if (!(len > 0)) continue;
+    n /= len;
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d a = p[(i + 1) % 3] - p[i], b = p[(i + 2) % 3] - p[i];
+      const double angle = std::atan2(a.cross(b).norm(), a.dot(b));
+      normals[idx[i]] += angle * n;
+    }
+  }
+  for (auto& n : normals) {
+    const double len = n.norm();
+    if (len > 0) n /= len;
+  }
+  return normals;
+}
+
+std::vector<double> compute_mean_curvature(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& normals) {
+  const std::size_t n = mesh.n_vertices();
+  std::vector<Eigen::Vector3d> laplace(n, Eigen::Vector3d::Zero());
+  std::vector<double> area(n, 0.0);
+  // Meyer, Desbrun, Schroeder, Barr 2003: K(x_i) = 1/(2 A_mixed) sum_j (cot a_ij + cot b_ij)(x_i - x_j),
+  // and K = 2 H n. The mixed area uses Voronoi areas on non-obtuse triangles and the
+  // area/2, area/4 split on obtuse ones, so the areas tile the surface.
+  for (auto f : mesh.faces()) {
+    int idx[3];
+    Eigen::Vector3d p[3];
+    int k = 0;
+    for (auto v : mesh.fv_range(f)) {
+      idx[k] = v.idx();
+      p[k++] = to_eigen(mesh.point(v));
+    }
+    const double double_area = (p[1] - p[0]).cross(p[2] - p[0]).norm();
+    if (!(double_area > 1e-300)) continue;  // zero-area triangles carry no curvature information
+    double cot[3];
+    double dots[3];
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d a = p[(i + 1) % 3] - p[i], b = p[(i + 2) % 3] - p[i];
+      dots[i] = a.dot(b);
+      cot[i] = dots[i] / double_area;  // |a x b| == double_area for every corner
+    }
+    for (int i = 0; i < 3; ++i) {
+      const int j = (i + 1) % 3, l = (i + 2) % 3;
+      // the edge (j, l) is opposite corner i
+      const Eigen::Vector3d e = p[j] - p[l];
+      laplace[idx[j]] += cot[i] * e;
+      laplace[idx[l]] -= cot[i] * e;
+    }
+    const double tri_area = 0.5 * double_area;
+    const bool obtuse = dots[0] < 0 || dots[1] < 0 || dots[2] < 0;
+    for (int i = 0; i < 3; ++i) {
+      if (!obtuse) {
+        const int j = (i + 1) % 3, l = (i + 2) % 3;
+        area[idx[i]] += 0.125 * ((p[i] - p[l]).squaredNorm() * cot[j] + (p[i] - p[j]).squaredNorm() * cot[l]);
+      } else {
+        area[idx[i]] += dots[i] < 0 ? 0.5 * tri_area : 0.25 * tri_area;
+      }
+    }
+  }
+  std::vector<double> curvature(n, 0.0);
+  std::vector<char> on_boundary(n, 0);
+  for (auto v : mesh.vertices()) {
+    on_boundary[v.idx()] = mesh.is_boundary(v) || !mesh.is_manifold(v);
+    if (area[v.idx()] > 0) curvature[v.idx()] = 0.25 * laplace[v.idx()].dot(normals[v.idx()]) / area[v.idx()];
+  }
+  // The cotangent Laplacian is incomplete at the boundary; borrow from interior neighbours.
+  std::vector<double> boundary_value(n, 0.0);
+  for (auto v : mesh.vertices()) {
+    if (!on_boundary[v.idx()]) continue;
+    double sum = 0;
+    int count = 0;
+    for (auto w : mesh.vv_range(v))
+      if (!on_boundary[w.idx()]) sum += curvature[w.idx()], ++count;
+    boundary_value[v.idx()] = count > 0 ? sum / count : 0.0;
+  }
+  for (std::size_t v = 0; v < n; ++v)
+    if (on_boundary[v]) curvature[v] = boundary_value[v];
+  return curvature;
+}
+
+}  // namespace featureline

@@ -1,0 +1,100 @@
+// The curvature stage: per-vertex curvature and the feature field every later stage reads
+// (feature path costs, the marching search's f_C, the snake's potential of Eq. 13), plus the
+// mesh's sharp creases. Computed once per mesh in prepare_mesh; nothing here depends on a
+// request.
+//
+// The paper uses the one-ring (cotangent) mean curvature. On scans that field is dominated by
+// noise, and on CAD tessellations (long skinny triangles) it is meaningless; so the default
+// field fits a local height function (a degree-2 jet, as in Cazals and Pouget's osculating
+// jets and CGAL's Monge fitting) over a neighbourhood whose radius follows the mesh's
+// estimated noise, and takes its principal curvatures. Sharp edges are found by their
+// dihedral angle and treated as features in their own right.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "engine/tri_mesh.h"
+
+namespace featureline {
+
+enum class CurvatureMethod {
+  cotangent,  ///< the paper: one-ring cotangent mean curvature H (Meyer et al. 2003)
+  jet,        ///< principal curvatures of a weighted degree-2 fit over a neighbourhood radius
+};
+std::string to_string(CurvatureMethod method);
+std::optional<CurvatureMethod> parse_curvature_method(const std::string& name);
+
+struct CurvatureOptions {
+  CurvatureMethod method = CurvatureMethod::jet;
+  /// Jet neighbourhood radius in local edge lengths (the mean length of a vertex's edges).
+  /// 0 chooses it from the estimated noise: 2 on clean meshes, growing to 6 at heavy noise.
+  double radius = 0;
+  /// Laplacian passes over the feature field afterwards; each replaces a value by the mean of
+  /// itself and its neighbours' mean.
+  int smoothing_passes = 0;
+  /// An edge whose faces' normals differ by more than this many degrees is a crease. 0 chooses
+  /// it from the noise (at least 40 degrees, and well above the noise's own dihedral angles);
+  /// negative: no creases.
+  double crease_angle = 0;
+};
+
+/// Limits of the options, shared by validation, the JSON mapping and the API description.
+struct CurvatureLimits {
+  static constexpr double max_radius = 12;
+  static constexpr int max_smoothing_passes = 100;
+  static constexpr double max_crease_angle = 179;
+};
+
+struct CurvatureField {
+  std::vector<double> mean;   ///< signed mean curvature (cotangent), positive on convex parts
+  /// Signed principal curvatures, k_max >= k_min, positive where the surface is convex along
+  /// that direction. The cotangent method sets both to H.
+  std::vector<double> k_max, k_min;
+  /// Crease flag per entry of the prepared mesh's adjacency rows (parallel to `neighbors`):
+  /// +1 convex crease, -1 concave crease, 0 smooth edge.
+  std::vector<std::int8_t> crease;
+  std::vector<char> on_crease;  ///< per vertex: one of its edges is a crease
+  double noise = 0;         ///< estimated RMS noise along the normal, in local edge lengths
+  double radius = 0;        ///< jet radius used (local edge lengths); 0 for cotangent
+  double crease_angle = 0;  ///< degrees; 0 when creases are off
+  std::size_t crease_edges = 0;
+};
+
+/// Adjacency in compressed rows: neighbours of v are neighbors[offsets[v] .. offsets[v+1]).
+struct AdjacencyView {
+  const std::vector<std::uint32_t>& offsets;
+  const std::vector<std::uint32_t>& neighbors;
+};
+
+/// \throw InvalidInputError for options out of range.
+CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& positions,
+                                       const std::vector<Eigen::Vector3d>& normals, const AdjacencyView& adjacency,
+                                       const CurvatureOptions& options = {});
+
+/// The signed mean curvature of every vertex by the cotangent formula (exposed for tests).
+std::vector<double> compute_mean_curvature(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& normals);
+
+/// Angle-weighted unit vertex normals.
+std::vector<Eigen::Vector3d> compute_vertex_normals(const TriMesh& mesh);
+
+/// Feature value of a vertex for lines of a given sign: +1 ridges (k_max, negative clipped to
+/// 0), -1 valleys (-k_min, clipped), 0 either (the larger |k|). In curvature units.
+inline double feature_value(const CurvatureField& field, std::uint32_t v, double sign) {
+  if (sign > 0) return field.k_max[v] > 0 ? field.k_max[v] : 0;
+  if (sign < 0) return field.k_min[v] < 0 ? -field.k_min[v] : 0;
+  const double a = field.k_max[v] < 0 ? -field.k_max[v] : field.k_max[v];
+  const double b = field.k_min[v] < 0 ? -field.k_min[v] : field.k_min[v];
+  return a > b ? a : b;
+}
+
+/// The principal curvature of larger magnitude, signed (what the curvature map shows).
+inline double dominant_curvature(const CurvatureField& field, std::uint32_t v) {
+  return -field.k_min[v] > field.k_max[v] ? field.k_min[v] : field.k_max[v];
+}
+
+}  // namespace featureline
