@@ -106,6 +106,9 @@ void apply_options_json(const json& j, FeatureLineOptions& o) {
   r.boolean("refine", o.refine);
   r.boolean("pin_interior_keys", o.pin_interior_keys);
   r.integer("min_piece_edges", o.min_piece_edges, 2, 1000);
+  r.integer("exact_crease_edges", o.exact_crease_edges, 0, 1000);
+  r.number("exact_crease_noise", o.exact_crease_noise, 0, 1);
+  r.number("keep_initial_below", o.keep_initial_below, 0, 1);
   if (const json* s = r.object("snake")) {
     FieldReader sr(*s, r.child("snake"));
     SnakeOptions& so = o.snake;
@@ -146,6 +149,9 @@ json options_to_json(const FeatureLineOptions& o) {
       {"refine", o.refine},
       {"pin_interior_keys", o.pin_interior_keys},
       {"min_piece_edges", o.min_piece_edges},
+      {"exact_crease_edges", o.exact_crease_edges},
+      {"exact_crease_noise", o.exact_crease_noise},
+      {"keep_initial_below", o.keep_initial_below},
       {"snake",
        {{"alpha", o.snake.alpha},
         {"beta", o.snake.beta},
@@ -177,6 +183,22 @@ json feature_line_to_json(const FeatureLineResult& r) {
   json fallbacks = json::array();
   for (const auto& f : r.initial.fallbacks)
     fallbacks.push_back({{"segment", f.segment}, {"from", to_string(f.from)}, {"to", to_string(f.to)}, {"reason", f.reason}});
+  // One object per piece, in line order; "reason" is always present, empty unless the piece
+  // kept its initial line (kept == "initial").
+  json pieces_detail = json::array();
+  std::size_t iteration_caps = 0;
+  for (const auto& p : r.piece_reports) {
+    pieces_detail.push_back({{"from", p.from},
+                             {"to", p.to},
+                             {"edges", p.edges},
+                             {"kept", p.kept},
+                             {"reason", p.reason},
+                             {"iterations", p.iterations},
+                             {"iteration_cap", p.iteration_cap},
+                             {"initial_strength", p.initial_strength},
+                             {"refined_strength", p.refined_strength}});
+    iteration_caps += p.iteration_cap ? 1 : 0;
+  }
   return {
       {"keys", r.keys},
       {"closed", r.closed},
@@ -192,6 +214,8 @@ json feature_line_to_json(const FeatureLineResult& r) {
         {"strip_faces", r.strip_faces},
         {"pieces", r.pieces},
         {"splits", r.splits},
+        {"iteration_caps", iteration_caps},
+        {"pieces_detail", pieces_detail},
         {"refined", r.refined_by_snake},
         {"fallbacks", fallbacks},
         {"warnings", r.warnings},
@@ -224,8 +248,13 @@ json mesh_info_to_json(const PreparedMesh& m, double load_ms) {
       {"curvature",
        {{"min", s.curvature_min},
         {"max", s.curvature_max},
-        {"percentiles",  // of |H|
-         {{"p50", s.abs_curvature_p50}, {"p90", s.abs_curvature_p90}, {"p99", s.abs_curvature_p99}}}}},
+        {"percentiles",  // of the feature value (the larger |principal curvature|)
+         {{"p50", s.abs_curvature_p50}, {"p90", s.abs_curvature_p90}, {"p99", s.abs_curvature_p99}}},
+        {"method", s.curvature_method},
+        {"noise", s.noise},
+        {"radius", s.curvature_radius},
+        {"crease_angle", s.crease_angle},
+        {"crease_edges", s.crease_edges}}},
       {"memory_bytes", m.memory_bytes()},
       {"warnings", m.warnings},
       {"timings_ms", {{"load", load_ms}, {"prepare", m.prepare_ms}}},

@@ -17,9 +17,14 @@ void apply_options_json(const nlohmann::json& json, FeatureLineOptions& options)
 nlohmann::json options_to_json(const FeatureLineOptions& options);
 
 /// The feature-line answer: keys, closed, initial, refined, stats (field names are the contract).
+/// stats.pieces_detail has one object per FeatureLineResult::piece_reports entry, in line order;
+/// its "reason" is always present and empty unless the piece kept its initial line.
+/// stats.iteration_caps counts the pieces whose snake stopped at its iteration cap.
 nlohmann::json feature_line_to_json(const FeatureLineResult& result);
 
-/// The prepared mesh's description, as `featureline info` prints it.
+/// The prepared mesh's description, as `featureline info` prints it. Its "curvature" object
+/// describes the feature value (the larger |principal curvature|) and the curvature stage:
+/// method, noise, radius, crease_angle, crease_edges (MeshStatistics).
 nlohmann::json mesh_info_to_json(const PreparedMesh& mesh, double load_ms);
 
 /// Parses a key list "10,20,30" (CLI form).

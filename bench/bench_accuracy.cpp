@@ -86,6 +86,9 @@ std::vector<Variant> all_variants() {
         p.curvature.smoothing_passes = 3;
       }),
       variant("marching", [](PrepareOptions&, FeatureLineOptions& o) { o.initial.method = InitialMethod::marching; }),
+      
+
+      variant("jet, fixed radius 6", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.radius = 6; }),
   };
 }
 

@@ -132,11 +132,12 @@ std::vector<double> local_edge_lengths(const std::vector<Eigen::Vector3d>& P, co
   return local;
 }
 
-// Fits every vertex at `radius` local edge lengths; vertices whose fit fails keep `fallback`.
+// Fits every `stride`-th vertex at `radius` local edge lengths; vertices whose fit fails keep
+// `fallback`.
 // Returns the per-vertex residuals in local edge lengths (negative where no fit was made).
 std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
                             const AdjacencyView& adj, const std::vector<char>& on_crease,
-                            const std::vector<double>& local, double radius,
+                            const std::vector<double>& local, double radius, std::size_t stride,
                             const std::vector<double>& fallback, CurvatureField& field) {
   const std::size_t n = P.size();
   std::vector<double> residual(n, -1.0);
@@ -144,6 +145,7 @@ std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::ve
     std::vector<std::uint32_t> stamp(n, 0), hood;
     std::uint32_t generation = 0;
     for (std::size_t v = begin; v < end; ++v) {
+      if (v % stride != 0) continue;
       field.k_max[v] = field.k_min[v] = fallback[v];
       if (!(local[v] > 0)) continue;
       JetFit fit;
@@ -251,14 +253,14 @@ CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Ei
   field.k_max = field.mean;
   field.k_min = field.mean;
   const std::vector<double> local = local_edge_lengths(positions, adjacency);
-  // Creases: above 40 degrees, and well above the dihedral angles the noise makes on its own.
+  // Creases: above 30 degrees, and well above the dihedral angles the noise makes on its own.
   if (options.crease_angle >= 0) {
     const EdgeAngles angles = dihedral_angles(mesh, positions, adjacency);
     std::vector<double> interior;
     for (std::size_t k = 0; k < angles.angle.size(); ++k)
       if (angles.corner_a[k] >= 0) interior.push_back(angles.angle[k]);
     const double noise_angle = 4 * median_of(interior) * 180 / kPi;
-    field.crease_angle = options.crease_angle > 0 ? options.crease_angle : std::max(40.0, noise_angle);
+    field.crease_angle = options.crease_angle > 0 ? options.crease_angle : std::max(30.0, noise_angle);
     mark_creases(positions, adjacency, angles, field.crease_angle, field);
   } else {
     field.crease.assign(adjacency.neighbors.size(), 0);
@@ -270,15 +272,19 @@ CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Ei
       if (field.crease[k] != 0) on_crease[v] = 1;
   if (options.method == CurvatureMethod::jet) {
     // Noise: the median residual of fits over two edge lengths (flat and smooth parts fit
-    // almost exactly, so what remains is the noise; creases are too few to move a median).
+    // almost exactly, so what remains is the noise; creases are too few to move a median),
+    // on a sample of about 20,000 vertices: a median needs no more, and large meshes stay fast.
     constexpr double kProbeRadius = 2;
-    std::vector<double> residual = fit_all(positions, normals, adjacency, on_crease, local, kProbeRadius, field.mean, field);
+    const std::size_t stride = std::max<std::size_t>(1, n / 20000);
+    std::vector<double> residual =
+        fit_all(positions, normals, adjacency, on_crease, local, kProbeRadius, stride, field.mean, field);
     residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return r < 0; }), residual.end());
     field.noise = median_of(residual);
     // Wider neighbourhoods average noise away (the variance of a fitted curvature falls as
     // radius^-6 at a fixed density) but blur features; grow the radius with the noise only.
-    field.radius = options.radius > 0 ? options.radius : std::clamp(2 + 30 * field.noise, kProbeRadius, 6.0);
-    if (field.radius != kProbeRadius) fit_all(positions, normals, adjacency, on_crease, local, field.radius, field.mean, field);
+    field.radius = options.radius > 0 ? options.radius : std::clamp(2 + 100 * field.noise, kProbeRadius, 6.0);
+    if (field.radius != kProbeRadius || stride != 1)
+      fit_all(positions, normals, adjacency, on_crease, local, field.radius, 1, field.mean, field);
   }
   for (int pass = 0; pass < options.smoothing_passes; ++pass)
     for (auto* values : {&field.k_max, &field.k_min}) {

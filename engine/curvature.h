@@ -38,7 +38,7 @@ struct CurvatureOptions {
   /// itself and its neighbours' mean.
   int smoothing_passes = 0;
   /// An edge whose faces' normals differ by more than this many degrees is a crease. 0 chooses
-  /// it from the noise (at least 40 degrees, and well above the noise's own dihedral angles);
+  /// it from the noise (at least 30 degrees, and well above the noise's own dihedral angles);
   /// negative: no creases.
   double crease_angle = 0;
 };

@@ -29,7 +29,7 @@ struct FeatureLineOptions {
   int exact_crease_edges = 2;
   /// Noise (RMS along the normal, local edge lengths) above which crease vertices are no longer
   /// trusted to lie on the true crease and crease runs are refined by the snake.
-  double exact_crease_noise = 0.02;
+  double exact_crease_noise = 0.08;
   /// Never worse: a refined piece whose mean feature strength along it falls below this share
   /// of its initial line's is replaced by the initial line (and reported in `pieces`).
   double keep_initial_below = 0.9;

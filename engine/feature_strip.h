@@ -13,8 +13,8 @@
 namespace featureline {
 
 struct StripOptions {
-  /// Rings of the strip around the line (the paper's k). 0 chooses 2 or 3 from the local mesh
-  /// density: 3 when the line spans at least `dense_line_edges` of its local mean edge length.
+  /// Rings of the strip around the line (the paper's k). 0 chooses from the line's length in
+  /// edges: 2 below `dense_line_edges`, 3 from it, 4 from twice, 6 from four times it.
   int rings = 0;
   int dense_line_edges = 12;
   /// A flattened triangle whose edge lengths differ from the surface's by more than this

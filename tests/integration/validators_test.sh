@@ -94,6 +94,10 @@ mutate "$LINE" "$WORK/m10.json" 'd.stats.fallbacks = [{segment: 0, from: "marchi
 expect 1 "fallback without reason fails" --grep 'missing required property "reason"' -- node "$VR" POST "$FL" 200 "$WORK/m10.json"
 mutate "$LINE" "$WORK/m11.json" 'd.stats.fallbacks = [{segment: 0, from: "marching", to: "feature-path", reason: "overshot the end key"}];'
 expect 0 "fallback with every field is valid" -- node "$VR" POST "$FL" 200 "$WORK/m11.json"
+mutate "$LINE" "$WORK/m13.json" 'd.stats.pieces_detail[0].kept = "smoothed";'
+expect 1 "unknown pieces_detail kept fails" --grep '/stats/pieces_detail/0/kept' -- node "$VR" POST "$FL" 200 "$WORK/m13.json"
+mutate "$LINE" "$WORK/m14.json" 'delete d.stats.pieces_detail[0].reason;'
+expect 1 "piece report without reason fails" --grep 'missing required property "reason"' -- node "$VR" POST "$FL" 200 "$WORK/m14.json"
 mutate "$LINE" "$WORK/m12.json" 'const l = JSON.parse(JSON.stringify(d)); delete l.refined; for (const k of Object.keys(d)) delete d[k]; d.lines = [l];'
 expect 1 "batch whose line misses refined fails" --grep '/lines/0' -- node "$VR" POST "$FL" 200 "$WORK/m12.json"
 printf '{"keys": [1, 2], ' >"$WORK/trunc.json"
@@ -108,6 +112,8 @@ mutate "$MESH" "$WORK/d1.json" 'd.mesh_id = d.mesh_id.toUpperCase();'
 expect 1 "uppercase mesh_id fails" --grep '/mesh_id' -- node "$VR" POST /v1/meshes 201 "$WORK/d1.json"
 mutate "$MESH" "$WORK/d2.json" 'delete d.curvature.percentiles.p99;'
 expect 1 "missing curvature.percentiles.p99 fails" --grep 'missing required property "p99"' -- node "$VR" POST /v1/meshes 201 "$WORK/d2.json"
+mutate "$MESH" "$WORK/d6.json" 'd.curvature.method = "quadric";'
+expect 1 "unknown curvature.method fails" --grep '/curvature/method' -- node "$VR" POST /v1/meshes 201 "$WORK/d6.json"
 mutate "$MESH" "$WORK/d3.json" 'd.vertices = 1681.5;'
 expect 1 "fractional vertex count fails" --grep '/vertices: must be integer' -- node "$VR" POST /v1/meshes 201 "$WORK/d3.json"
 mutate "$MESH" "$WORK/d4.json" 'd.surface_area = 12.5;'
@@ -146,6 +152,8 @@ mutate "$FIX/line_request.json" "$WORK/r2.json" 'd.options.snake.iterationz = 5;
 expect 1 "unknown snake option fails" --grep 'unexpected property "iterationz"' -- node "$VR" --request POST "$FL" "$WORK/r2.json"
 mutate "$FIX/line_request.json" "$WORK/r3.json" 'd.options.rings = 9;'
 expect 1 "rings out of range fails" --grep '/options/rings' -- node "$VR" --request POST "$FL" "$WORK/r3.json"
+mutate "$FIX/line_request.json" "$WORK/r8.json" 'd.options.keep_initial_below = 1.5;'
+expect 1 "keep_initial_below out of range fails" --grep '/options/keep_initial_below' -- node "$VR" --request POST "$FL" "$WORK/r8.json"
 mutate "$FIX/line_request.json" "$WORK/r4.json" 'd.keys[1] = {point: [0, 0]};'
 expect 1 "2-component point key fails" --grep '/keys/1' -- node "$VR" --request POST "$FL" "$WORK/r4.json"
 mutate "$FIX/line_request.json" "$WORK/r5.json" 'd.keys[0] = -3;'

@@ -1,0 +1,165 @@
+// Accuracy against known answers (issue: the refined line must never be worse than the initial
+// one): the curvature stage's jet fit, noise estimate and creases, and whole lines on smooth
+// ridges and valleys at 0-30% noise and on CAD-like creases with tight rounded corners and long
+// skinny triangles. Distances are in grid spacings (fields) or outline edge lengths (slabs).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "engine/errors.h"
+#include "engine/feature_line.h"
+#include "tests/support/accuracy_meshes.h"
+#include "tests/support/line_metrics.h"
+#include "tests/support/synthetic_meshes.h"
+
+namespace featureline {
+namespace {
+
+using namespace featureline::testing;
+
+std::vector<std::uint32_t> keys_on_crest(const HeightField& field, std::initializer_list<double> xs) {
+  std::vector<std::uint32_t> keys;
+  for (double x : xs) keys.push_back(nearest_vertex(field.mesh, x, field.crest(x)));
+  return keys;
+}
+
+TEST(JetCurvature, SphereAndCylinderPrincipalCurvatures) {
+  const auto sphere = prepare_mesh(make_icosphere(2.0, 4));
+  for (std::uint32_t v = 0; v < sphere->n_vertices(); ++v) {
+    EXPECT_NEAR(sphere->curvature.k_max[v], 0.5, 0.01);
+    EXPECT_NEAR(sphere->curvature.k_min[v], 0.5, 0.01);
+  }
+  const auto tube = prepare_mesh(make_cylinder(1.0, 4.0, 40, 64, false));
+  for (std::uint32_t v = 64 * 10; v < 64 * 30; ++v) {  // away from the open ends
+    EXPECT_NEAR(tube->curvature.k_max[v], 1.0, 0.02);
+    EXPECT_NEAR(tube->curvature.k_min[v], 0.0, 0.02);
+  }
+}
+
+TEST(JetCurvature, NoiseEstimateAndRadiusFollowTheNoise) {
+  const auto field = make_ridge_field(61, 0.2, 1, 0.3, 0.25, 0.3);
+  const auto clean = prepare_mesh(field.mesh);
+  EXPECT_LT(clean->curvature.noise, 0.01);
+  EXPECT_NEAR(clean->curvature.radius, 2.0, 0.2);
+  // 10% RMS displacement in 3D is 5.8% along the normal; a 6-parameter fit over ~15 points
+  // keeps about 80% of it in its residuals.
+  const auto noisy = prepare_mesh(with_noise(field.mesh, 0.1, 3));
+  EXPECT_NEAR(noisy->curvature.noise, 0.045, 0.01);
+  EXPECT_GT(noisy->curvature.radius, 5.0);
+  PrepareOptions fixed;
+  fixed.curvature.radius = 3;
+  EXPECT_EQ(prepare_mesh(with_noise(field.mesh, 0.1, 3), fixed)->curvature.radius, 3.0);
+}
+
+TEST(JetCurvature, SlabOutlinesAreConvexCreasesAndNothingElse) {
+  for (auto tessellation : {SlabTessellation::skinny, SlabTessellation::fine}) {
+    RoundedSlabOptions options;
+    options.tessellation = tessellation;
+    const auto part = make_rounded_slab(options);
+    const auto mesh = prepare_mesh(part.mesh);
+    EXPECT_EQ(mesh->curvature.crease_edges, part.top_outline.size() + part.bottom_outline.size());
+    const auto& outline = part.top_outline;
+    for (std::size_t i = 0; i < outline.size(); ++i) {
+      const auto a = outline[i], b = outline[(i + 1) % outline.size()];
+      for (auto k = mesh->neighbor_offsets[a]; k < mesh->neighbor_offsets[a + 1]; ++k)
+        if (mesh->neighbors[k] == b) EXPECT_EQ(mesh->curvature.crease[k], 1) << "edge " << a << "-" << b;
+    }
+  }
+}
+
+TEST(JetCurvature, OptionsOutOfRangeAreRefused) {
+  PrepareOptions options;
+  options.curvature.radius = 100;
+  EXPECT_THROW(prepare_mesh(make_icosphere(1.0, 2), options), InvalidInputError);
+  options.curvature.radius = 0;
+  options.curvature.crease_angle = 200;
+  EXPECT_THROW(prepare_mesh(make_icosphere(1.0, 2), options), InvalidInputError);
+}
+
+struct LineDistances {
+  double initial = 0, refined = 0, refined_max = 0;
+};
+
+LineDistances ridge_line(double amplitude, double noise, std::uint64_t seed) {
+  const auto field = make_ridge_field(81, 0.2, seed, amplitude, 0.25, 0.3);
+  const auto mesh = prepare_mesh(with_noise(field.mesh, noise * field.spacing / mean_edge_length(field.mesh), seed));
+  FeatureLineRequest request;
+  request.keys = keys_on_crest(field, {-0.8, 0.0, 0.8});
+  const auto result = detect_feature_line(*mesh, request);
+  const auto refined = crest_distance(field, refined_positions(result));
+  return {crest_distance(field, result.initial_points).mean / field.spacing, refined.mean / field.spacing,
+          refined.max / field.spacing};
+}
+
+TEST(Accuracy, RidgesAndValleysAtEveryNoiseLevelAreNeverWorseThanTheInitialLine) {
+  for (double amplitude : {0.3, -0.3})
+    for (double noise : {0.0, 0.1, 0.2, 0.3}) {
+      const auto d = ridge_line(amplitude, noise, 5);
+      SCOPED_TRACE(std::string(amplitude > 0 ? "ridge" : "valley") + " noise " + std::to_string(noise));
+      EXPECT_LT(d.refined, d.initial);
+      if (noise == 0) EXPECT_LT(d.refined, 0.08);
+      if (noise > 0 && noise <= 0.2) {
+        EXPECT_LT(d.refined, 0.15);
+        EXPECT_LT(d.refined, 0.5 * d.initial);
+      }
+      EXPECT_LT(d.refined_max, 1.0);
+    }
+}
+
+double slab_line_distance(const CadPart& part, const PreparedMesh& mesh, const FeatureLineResult& result, double unit) {
+  const auto truth = positions_of(part.mesh, part.top_outline);
+  double sum = 0;
+  for (const auto& p : result.refined) sum = std::max(sum, distance_to_polyline(truth, true, p.position));
+  (void)mesh;
+  return sum / unit;
+}
+
+TEST(Accuracy, CleanCreasesAreFollowedExactlyThroughTightCorners) {
+  for (auto tessellation : {SlabTessellation::skinny, SlabTessellation::fine}) {
+    RoundedSlabOptions options;
+    options.tessellation = tessellation;
+    const auto part = make_rounded_slab(options);
+    const auto mesh = prepare_mesh(part.mesh);
+    const auto& loop = part.top_outline;
+    const double unit = (mesh->positions[loop[1]] - mesh->positions[loop[0]]).norm();
+    // Open line over a quarter of the outline, through the rounded corner at (+a, +b).
+    FeatureLineRequest open;
+    const std::size_t q = loop.size() / 4;
+    open.keys = {loop[q / 2], loop[q], loop[q + q / 2 + 2]};
+    const auto line = detect_feature_line(*mesh, open);
+    EXPECT_LT(slab_line_distance(part, *mesh, line, unit), 0.02);
+    for (const auto& piece : line.piece_reports) EXPECT_EQ(piece.kept, "crease");
+    // The whole outline as a closed line with four keys.
+    FeatureLineRequest closed;
+    closed.closed = true;
+    for (std::size_t k = 0; k < 4; ++k) closed.keys.push_back(loop[k * loop.size() / 4 + 1]);
+    const auto ring = detect_feature_line(*mesh, closed);
+    EXPECT_LT(slab_line_distance(part, *mesh, ring, unit), 0.02);
+    EXPECT_EQ(ring.initial.vertices.size(), loop.size());
+  }
+}
+
+TEST(Accuracy, NoisyCreasesAreNeverWorseThanTheInitialLine) {
+  RoundedSlabOptions options;
+  options.tessellation = SlabTessellation::fine;
+  const auto part = make_rounded_slab(options);
+  const auto truth = positions_of(part.mesh, part.top_outline);
+  const double unit = (truth[1] - truth[0]).norm();
+  for (std::uint64_t seed : {1, 2}) {
+    const auto mesh = prepare_mesh(with_noise(part.mesh, 0.1 * unit / part.mean_edge_length, seed));
+    const auto& loop = part.top_outline;
+    FeatureLineRequest request;
+    const std::size_t q = loop.size() / 4;
+    request.keys = {loop[q / 2], loop[q], loop[q + q / 2 + 2]};
+    const auto result = detect_feature_line(*mesh, request);
+    double initial = 0, refined = 0;
+    for (const auto& p : result.initial_points) initial += distance_to_polyline(truth, true, p);
+    for (const auto& p : result.refined) refined += distance_to_polyline(truth, true, p.position);
+    initial /= double(result.initial_points.size());
+    refined /= double(result.refined.size());
+    EXPECT_LE(refined, initial * 1.05 + 0.005 * unit) << "seed " << seed;
+  }
+}
+
+}  // namespace
+}  // namespace featureline
