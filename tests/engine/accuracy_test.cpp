@@ -62,7 +62,9 @@ TEST(JetCurvature, SlabOutlinesAreConvexCreasesAndNothingElse) {
     for (std::size_t i = 0; i < outline.size(); ++i) {
       const auto a = outline[i], b = outline[(i + 1) % outline.size()];
       for (auto k = mesh->neighbor_offsets[a]; k < mesh->neighbor_offsets[a + 1]; ++k)
-        if (mesh->neighbors[k] == b) EXPECT_EQ(mesh->curvature.crease[k], 1) << "edge " << a << "-" << b;
+        if (mesh->neighbors[k] == b) {
+          EXPECT_EQ(mesh->curvature.crease[k], 1) << "edge " << a << "-" << b;
+        }
     }
   }
 }
@@ -97,7 +99,9 @@ TEST(Accuracy, RidgesAndValleysAtEveryNoiseLevelAreNeverWorseThanTheInitialLine)
       const auto d = ridge_line(amplitude, noise, 5);
       SCOPED_TRACE(std::string(amplitude > 0 ? "ridge" : "valley") + " noise " + std::to_string(noise));
       EXPECT_LT(d.refined, d.initial);
-      if (noise == 0) EXPECT_LT(d.refined, 0.08);
+      if (noise == 0) {
+        EXPECT_LT(d.refined, 0.08);
+      }
       if (noise > 0 && noise <= 0.2) {
         EXPECT_LT(d.refined, 0.15);
         EXPECT_LT(d.refined, 0.5 * d.initial);
