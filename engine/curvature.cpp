@@ -79,7 +79,10 @@ JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::V
   JetFit fit;
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
   const double inv_r = 1.0 / radius;
-  for (auto w : hood) n += std::exp(-2 * (P[w] - P[v]).squaredNorm() * inv_r * inv_r) * N[w];
+  // Gaussian weights, sigma = radius / 2 (a compact (1 - d^2/r^2)^2 kernel was 25% faster but
+  // its smaller effective neighbourhood cost 30-90% accuracy on noisy ridges: bench_accuracy).
+  auto weight_at = [](double d2) { return std::exp(-2 * d2); };
+  for (auto w : hood) n += weight_at((P[w] - P[v]).squaredNorm() * inv_r * inv_r) * N[w];
   if (!(n.norm() > 1e-12)) n = N[v];
   if (!(n.norm() > 1e-12)) return fit;
   n.normalize();
@@ -90,15 +93,15 @@ JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::V
   for (auto w : hood) {
     const Eigen::Vector3d x = (P[w] - P[v]) * inv_r;
     const double u = x.dot(t1), s = x.dot(t2), h = x.dot(n);
-    const double weight = std::exp(-2 * x.squaredNorm());  // Gaussian, sigma = radius / 2
+    const double weight = weight_at(x.squaredNorm());
     Eigen::Matrix<double, 6, 1> row;
     row << 1, u, s, u * u, u * s, s * s;
-    A.selfadjointView<Eigen::Lower>().rankUpdate(row, weight);
+    A.noalias() += (weight * row) * row.transpose();
     b += weight * h * row;
     weight_sum += weight;
     hh += weight * h * h;
   }
-  const Eigen::Matrix<double, 6, 6> full = A.selfadjointView<Eigen::Lower>();
+  const Eigen::Matrix<double, 6, 6>& full = A;
   // A neighbourhood on a line or too few points leaves the quadric undetermined.
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(full);
   const auto d = ldlt.vectorD();
