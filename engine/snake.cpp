@@ -361,6 +361,7 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
   }
   points.push_back(point_at_vertex(strip.line.back()));
 
+  const std::size_t max_points = 4 * points.size() + 16;
   // Damping of the moves (see the convergence test below).
   double damping = 1;
   // Paper: points farther apart than 3h/2 get points between them, points closer than h/2 are
@@ -373,8 +374,11 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
       const bool last = i + 1 == points.size();
       const double gap = (points[i].uv - next.back().uv).norm();
       if (!last && gap < 0.5 * h) continue;  // too close: delete
-      if (gap > 1.5 * h) {                     // too far: insert evenly
-        const int pieces = int(std::ceil(gap / h));
+      const int pieces = int(std::ceil(gap / h));
+      // Bounded work whatever the options: a line may at most quadruple its initial point count
+      // (an extreme kappa once made it 209,204 points and 51 s; ../shared/data/regressions).
+      const bool room = next.size() + (points.size() - i) + std::size_t(pieces) <= max_points;
+      if (gap > 1.5 * h && room) {             // too far: insert evenly
         const StripPoint from = next.back();
         for (int k = 1; k < pieces; ++k) {
           StripPoint p = from;

@@ -2,11 +2,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <thread>
 
 #include "api/feature_line_json.h"
 #include "engine/errors.h"
 #include "engine/feature_line.h"
+#include "engine/mesh_io.h"
 #include "tests/support/line_metrics.h"
 #include "tests/support/synthetic_meshes.h"
 
@@ -129,6 +131,29 @@ TEST(FeatureLineJson, OptionsAreStrict) {
   FeatureLineOptions again;
   apply_options_json(options_to_json(defaults), again);
   EXPECT_EQ(options_to_json(again), options_to_json(defaults));
+}
+
+}  // namespace
+}  // namespace featureline
+
+namespace featureline {
+namespace {
+
+TEST(FeatureLine, ExtremeKappaRegressionIsBoundedInPoints) {
+  // ../shared/data/regressions/snake_runaway_ridge20: kappa = 1000 once grew the snake to
+  // 209,204 points over 51 s. The point count is now capped at 4x the initial sampling.
+  const std::string path = std::string(FEATURELINE_SHARED_DIR) + "/data/regressions/snake_runaway_ridge20.obj";
+  if (!std::ifstream(path).good()) FAIL() << "missing regression input " << path;
+  const auto mesh = prepare_mesh(read_mesh_file(path));
+  FeatureLineRequest request;
+  request.keys = {239, 182, 330, 355, 57, 225, 310};
+  request.options.snake.kappa = 1000;
+  const auto result = detect_feature_line(*mesh, request);
+  FeatureLineRequest plain = request;
+  plain.options.snake.kappa = SnakeOptions{}.kappa;
+  const auto normal = detect_feature_line(*mesh, plain);
+  EXPECT_LE(result.refined.size(), 4 * normal.refined.size() + 16 * result.pieces);
+  EXPECT_EQ(result.pieces, 6u);
 }
 
 }  // namespace
