@@ -17,12 +17,6 @@ namespace {
 
 using namespace featureline::testing;
 
-std::vector<std::uint32_t> keys_on_crest(const HeightField& field, std::initializer_list<double> xs) {
-  std::vector<std::uint32_t> keys;
-  for (double x : xs) keys.push_back(nearest_vertex(field.mesh, x, field.crest(x)));
-  return keys;
-}
-
 TEST(JetCurvature, SphereAndCylinderPrincipalCurvatures) {
   const auto sphere = prepare_mesh(make_icosphere(2.0, 4));
   for (std::uint32_t v = 0; v < sphere->n_vertices(); ++v) {
@@ -110,12 +104,12 @@ TEST(Accuracy, RidgesAndValleysAtEveryNoiseLevelAreNeverWorseThanTheInitialLine)
     }
 }
 
-double slab_line_distance(const CadPart& part, const PreparedMesh& mesh, const FeatureLineResult& result, double unit) {
+// Largest distance of the refined line from the slab's top outline, in outline edge lengths.
+double max_distance_to_outline(const CadPart& part, const FeatureLineResult& result, double unit) {
   const auto truth = positions_of(part.mesh, part.top_outline);
-  double sum = 0;
-  for (const auto& p : result.refined) sum = std::max(sum, distance_to_polyline(truth, true, p.position));
-  (void)mesh;
-  return sum / unit;
+  double worst = 0;
+  for (const auto& p : result.refined) worst = std::max(worst, distance_to_polyline(truth, true, p.position));
+  return worst / unit;
 }
 
 TEST(Accuracy, CleanCreasesAreFollowedExactlyThroughTightCorners) {
@@ -131,14 +125,14 @@ TEST(Accuracy, CleanCreasesAreFollowedExactlyThroughTightCorners) {
     const std::size_t q = loop.size() / 4;
     open.keys = {loop[q / 2], loop[q], loop[q + q / 2 + 2]};
     const auto line = detect_feature_line(*mesh, open);
-    EXPECT_LT(slab_line_distance(part, *mesh, line, unit), 0.02);
+    EXPECT_LT(max_distance_to_outline(part, line, unit), 0.02);
     for (const auto& piece : line.piece_reports) EXPECT_EQ(piece.kept, "crease");
     // The whole outline as a closed line with four keys.
     FeatureLineRequest closed;
     closed.closed = true;
     for (std::size_t k = 0; k < 4; ++k) closed.keys.push_back(loop[k * loop.size() / 4 + 1]);
     const auto ring = detect_feature_line(*mesh, closed);
-    EXPECT_LT(slab_line_distance(part, *mesh, ring, unit), 0.02);
+    EXPECT_LT(max_distance_to_outline(part, ring, unit), 0.02);
     EXPECT_EQ(ring.initial.vertices.size(), loop.size());
   }
 }

@@ -16,12 +16,6 @@ namespace {
 
 using namespace featureline::testing;
 
-std::vector<std::uint32_t> keys_on_crest(const HeightField& field, std::initializer_list<double> xs) {
-  std::vector<std::uint32_t> keys;
-  for (double x : xs) keys.push_back(nearest_vertex(field.mesh, x, field.crest(x)));
-  return keys;
-}
-
 TEST(InitialLine, GeodesicOnPlaneIsNearlyStraight) {
   const auto field = make_height_field([](double, double) { return 0.0; }, 41, 0.2, 5);
   const auto mesh = prepare_mesh(field.mesh);

@@ -14,12 +14,6 @@ namespace {
 
 using namespace featureline::testing;
 
-std::vector<std::uint32_t> keys_on_crest(const HeightField& field, std::initializer_list<double> xs) {
-  std::vector<std::uint32_t> keys;
-  for (double x : xs) keys.push_back(nearest_vertex(field.mesh, x, field.crest(x)));
-  return keys;
-}
-
 // The field with every vertex raised or lowered by up to `amplitude` grid spacings, the same on
 // every platform (std::mt19937_64 is fully specified; the mapping to [-1, 1) is ours).
 HeightField with_height_noise(HeightField field, double amplitude, std::uint64_t seed) {

@@ -10,19 +10,16 @@
 
 #include <Eigen/Geometry>
 
+#include "tests/support/generator_detail.h"
+
 namespace featureline::testing {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-using Vec3 = std::array<double, 3>;
-using Triangle = std::array<std::uint32_t, 3>;
-
-void require(bool condition, const char* function, const std::string& message) {
-  if (!condition) throw std::invalid_argument(std::string(function) + ": " + message);
-}
-
-bool positive_finite(double value) { return std::isfinite(value) && value > 0; }
+using detail::kPi;
+using detail::positive_finite;
+using detail::require;
+using detail::Triangle;
+using detail::Vec3;
 
 Eigen::Vector3d vec(const Vec3& p) { return {p[0], p[1], p[2]}; }
 

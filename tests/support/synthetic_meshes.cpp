@@ -9,19 +9,16 @@
 #include <unordered_map>
 #include <utility>
 
+#include "tests/support/generator_detail.h"
+
 namespace featureline::testing {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-using Vec3 = std::array<double, 3>;
-using Triangle = std::array<std::uint32_t, 3>;
-
-void require(bool condition, const char* function, const std::string& message) {
-  if (!condition) throw std::invalid_argument(std::string(function) + ": " + message);
-}
-
-bool positive_finite(double value) { return std::isfinite(value) && value > 0; }
+using detail::kPi;
+using detail::positive_finite;
+using detail::require;
+using detail::Triangle;
+using detail::Vec3;
 
 RawMesh finish(std::vector<Vec3> positions, std::vector<Triangle> triangles) {
   RawMesh mesh;
@@ -410,6 +407,12 @@ RawMesh translated(RawMesh mesh, double dx, double dy, double dz) {
     p[2] += dz;
   }
   return mesh;
+}
+
+std::vector<std::uint32_t> keys_on_crest(const HeightField& field, std::initializer_list<double> xs) {
+  std::vector<std::uint32_t> keys;
+  for (double x : xs) keys.push_back(nearest_vertex(field.mesh, x, field.crest(x)));
+  return keys;
 }
 
 }  // namespace featureline::testing

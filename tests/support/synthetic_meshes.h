@@ -13,6 +13,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <initializer_list>
 #include <vector>
 
 #include "engine/mesh_io.h"
@@ -185,6 +186,11 @@ double distance_to_crest(const HeightField& field, double x, double y);
 /// \param jitter  as in make_height_field
 /// \param seed    as in make_height_field
 RawMesh make_plane_grid(int n, double jitter, std::uint64_t seed);
+
+/// Ids of the vertices nearest to the field's crest at each given x (keys for lines on it).
+/// \param field  a ridge, valley or crease field (its `crest` must be set)
+/// \param xs     x positions along the crest
+std::vector<std::uint32_t> keys_on_crest(const HeightField& field, std::initializer_list<double> xs);
 
 /// Id of the vertex nearest to (x, y) in the xy plane (ties: the smallest id).
 /// \param mesh  a mesh with at least one vertex
