@@ -102,6 +102,7 @@ void apply_options_json(const json& j, FeatureLineOptions& o) {
   r.number("feature_weight_floor", o.initial.feature_weight_floor, 1e-4, 1);
   r.boolean("sign_aware", o.initial.sign_aware);
   r.integer("rings", o.strip.rings, 0, 8);
+  r.choice("flattening", o.strip.flattening, parse_strip_flattening, "automatic, conformal, similar-triangles");
   r.number("max_edge_distortion", o.strip.max_edge_distortion, 0.01, 100);
   r.boolean("refine", o.refine);
   r.boolean("pin_interior_keys", o.pin_interior_keys);
@@ -145,6 +146,7 @@ json options_to_json(const FeatureLineOptions& o) {
       {"feature_weight_floor", o.initial.feature_weight_floor},
       {"sign_aware", o.initial.sign_aware},
       {"rings", o.strip.rings},
+      {"flattening", to_string(o.strip.flattening)},
       {"max_edge_distortion", o.strip.max_edge_distortion},
       {"refine", o.refine},
       {"pin_interior_keys", o.pin_interior_keys},
@@ -253,6 +255,7 @@ json mesh_info_to_json(const PreparedMesh& m, double load_ms) {
         {"method", s.curvature_method},
         {"noise", s.noise},
         {"radius", s.curvature_radius},
+        {"smoothing_passes", s.curvature_smoothing_passes},
         {"crease_angle", s.crease_angle},
         {"crease_edges", s.crease_edges}}},
       {"memory_bytes", m.memory_bytes()},

@@ -28,7 +28,11 @@
 // snake iterations per line (mean); ms = detect_feature_line's total per line (median); err =
 // lines that threw.
 //
-// usage: bench_accuracy [--seeds N] [--quick] [--variant NAME] [--worst K]
+// usage: bench_accuracy [--seeds N] [--quick] [--variant NAME] [--worst K] [--sizes N,..] [--no-cad]
+//   --sizes N,..    only these field sizes (n x n grids)
+//   --no-cad        smooth fields only
+//   --cad-only      CAD cases only
+//   --trace         per line on stderr: distances, each piece's outcome, points along the line
 //   --seeds N       seeds for jitter and noise (default 3)
 //   --quick         fields n = 51 and 111 only, one seed, fandisk.off only (a few seconds)
 //   --variant NAME  run one variant of the table below
@@ -80,14 +84,19 @@ Variant variant(std::string name, const std::function<void(PrepareOptions&, Feat
 std::vector<Variant> all_variants() {
   return {
       variant("default (jet, auto radius)", [](PrepareOptions&, FeatureLineOptions&) {}),
-      variant("cotangent (paper)", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.method = CurvatureMethod::cotangent; }),
+      variant("cotangent (paper)", [](PrepareOptions& p, FeatureLineOptions&) {
+        p.curvature.method = CurvatureMethod::cotangent;
+        p.curvature.smoothing_passes = 0;
+      }),
       variant("cotangent, smoothing 3", [](PrepareOptions& p, FeatureLineOptions&) {
         p.curvature.method = CurvatureMethod::cotangent;
         p.curvature.smoothing_passes = 3;
       }),
       variant("marching", [](PrepareOptions&, FeatureLineOptions& o) { o.initial.method = InitialMethod::marching; }),
-      
-
+      variant("jet, no smoothing", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.smoothing_passes = 0; }),
+      variant("paper's strip layout", [](PrepareOptions&, FeatureLineOptions& o) {
+        o.strip.flattening = StripFlattening::similar_triangles;
+      }),
       variant("jet, fixed radius 6", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.radius = 6; }),
   };
 }
@@ -352,18 +361,50 @@ using Clock = std::chrono::steady_clock;
 
 }  // namespace
 
+// --trace: what happened to one line, for finding out why it is off.
+void trace_line(const std::string& name, double noise, int seed, const FeatureLineResult& r,
+                const std::vector<Eigen::Vector3d>& refined, const LineSpec& spec) {
+  std::fprintf(stderr, "%s, noise %g%%, seed %d: initial %.3f, refined %.3f\n", name.c_str(), noise, seed,
+               line_distance(r.initial_points, r.closed, spec.distance).mean, line_distance(refined, r.closed, spec.distance).mean);
+  for (const auto& w : r.warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
+  for (const auto& p : r.piece_reports)
+    std::fprintf(stderr, "  piece %u..%u (%zu edges): %s%s%s, %d iterations%s\n", p.from, p.to, p.edges, p.kept.c_str(),
+                 p.reason.empty() ? "" : ": ", p.reason.c_str(), p.iterations, p.iteration_cap ? " (cap)" : "");
+  const std::size_t step = std::max<std::size_t>(1, refined.size() / 40);
+  for (std::size_t i = 0; i < refined.size(); i += step)
+    std::fprintf(stderr, "  (%.3f, %.3f, %.3f) distance %.3f\n", refined[i].x(), refined[i].y(), refined[i].z(), spec.distance(refined[i]));
+}
+
+// "51,351" -> {51, 351}; grid sizes n (an n x n field has about 2 n^2 triangles).
+std::vector<int> parse_sizes(const std::string& text) {
+  std::vector<int> sizes;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const int n = std::atoi(text.substr(start, comma - start).c_str());
+    if (n >= 11 && n <= 1001) sizes.push_back(n);
+    start = comma + 1;
+  }
+  return sizes;
+}
+
 int main(int argc, char** argv) {
   int seeds = 3, worst_count = 12;
-  bool quick = false;
+  bool quick = false, no_cad = false, cad_only = false, trace = false;
+  std::vector<int> only_sizes;
   std::string only;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--seeds" && i + 1 < argc) seeds = std::max(1, std::atoi(argv[++i]));
     else if (arg == "--quick") quick = true;
+    else if (arg == "--sizes" && i + 1 < argc) only_sizes = parse_sizes(argv[++i]);
+    else if (arg == "--no-cad") no_cad = true;
+    else if (arg == "--cad-only") cad_only = true;
+    else if (arg == "--trace") trace = true;
     else if (arg == "--variant" && i + 1 < argc) only = argv[++i];
     else if (arg == "--worst" && i + 1 < argc) worst_count = std::max(0, std::atoi(argv[++i]));
     else {
-      std::fprintf(stderr, "usage: bench_accuracy [--seeds N] [--quick] [--variant NAME] [--worst K]\n"
+      std::fprintf(stderr, "usage: bench_accuracy [--seeds N] [--quick] [--variant NAME] [--worst K] [--sizes 51,351] [--no-cad | --cad-only] [--trace]\n"
                            "  --quick    n=51 and 111 fields, one seed, fandisk only\n");
       return 2;
     }
@@ -380,13 +421,18 @@ int main(int argc, char** argv) {
 
   std::vector<Case> cases;
   // About 5k, 24k, 80k and 245k triangles; the whole default run stays well under 3 minutes.
-  const std::vector<int> sizes = quick ? std::vector<int>{51, 111} : std::vector<int>{51, 111, 201, 351};
+  const std::vector<int> sizes = !only_sizes.empty() ? only_sizes
+                                 : quick             ? std::vector<int>{51, 111}
+                                                     : std::vector<int>{51, 111, 201, 351};
   for (bool ridge : {true, false})
-    for (int n : sizes) cases.push_back(ridge_case(ridge, n, {0, 10, 20, 30}));
+    for (int n : sizes)
+      if (!cad_only) cases.push_back(ridge_case(ridge, n, {0, 10, 20, 30}));
   for (auto t : {SlabTessellation::skinny, SlabTessellation::fine})
-    for (bool loop : {false, true}) cases.push_back(slab_case(t, loop));
+    for (bool loop : {false, true})
+      if (!no_cad) cases.push_back(slab_case(t, loop));
   const std::vector<std::string> cad_files =
-      quick ? std::vector<std::string>{"fandisk.off"}
+      no_cad  ? std::vector<std::string>{}
+      : quick ? std::vector<std::string>{"fandisk.off"}
             : std::vector<std::string>{"fandisk.off", "fandisk_aimatshape.off", "rocker-arm.obj", "wingnut.obj"};
   for (const auto& file : cad_files) {
     const std::string path = shared_mesh(file);
@@ -428,6 +474,7 @@ int main(int argc, char** argv) {
             try {
               const auto r = detect_feature_line(*mesh, request);
               const auto refined = refined_positions(r);
+              if (trace) trace_line(c.name, noise, seed, r, refined, spec);
               out.initial = line_distance(r.initial_points, r.closed, spec.distance);
               out.refined = line_distance(refined, r.closed, spec.distance);
               out.turning = closed_turning(refined, r.closed);

@@ -39,7 +39,8 @@ detect options:
   --weights A,B,G,D       marching weights alpha,beta,gamma,delta (paper: 1,1,1,2)
   --curvature-term T      marching f_C: similar-to-end (default) | similar-to-current | high-magnitude
   --no-fallback           fail instead of falling back when marching fails
-  --rings K               strip rings (0 = automatic 2 or 3)
+  --rings K               strip rings (0 = automatic: 2 to 8 by the line's length)
+  --flattening F          automatic (default) | conformal | similar-triangles (the paper's Fig. 5)
   --alpha A --beta B      snake elasticity and rigidity
   --tau T --kappa K       snake time step and feature-force weight
   --iterations N          snake iteration cap
@@ -50,7 +51,7 @@ detect options:
   --curvature M           jet (default: fitted over a radius that follows the noise) | cotangent (the paper)
   --curvature-radius R    jet radius in local edge lengths (0 = automatic, up to 12)
   --crease-angle A        dihedral angle in degrees above which an edge is a crease (0 = automatic, -1 = none)
-  --smooth-curvature N    Laplacian passes over the curvature field
+  --smooth-curvature N    Laplacian passes over the curvature field (-1: automatic, the default)
   --options JSON          any options as a JSON object (see api/openapi.yaml); flags win
   --out FILE              write FILE.json or FILE.glb instead of printing JSON
 )";
@@ -123,6 +124,7 @@ int run(int argc, char** argv) {
     } else if (flag == "--curvature-term") options["curvature_term"] = value();
     else if (flag == "--no-fallback") options["fallback"] = false;
     else if (flag == "--rings") options["rings"] = parse_int(value(), "--rings");
+    else if (flag == "--flattening") options["flattening"] = value();
     else if (flag == "--alpha") snake["alpha"] = parse_number(value(), "--alpha");
     else if (flag == "--beta") snake["beta"] = parse_number(value(), "--beta");
     else if (flag == "--tau") snake["tau"] = parse_number(value(), "--tau");

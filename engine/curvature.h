@@ -34,9 +34,12 @@ struct CurvatureOptions {
   /// Jet neighbourhood radius in local edge lengths (the mean length of a vertex's edges).
   /// 0 chooses it from the estimated noise: 2 on clean meshes, growing to 6 at heavy noise.
   double radius = 0;
-  /// Laplacian passes over the feature field afterwards; each replaces a value by the mean of
-  /// itself and its neighbours' mean.
-  int smoothing_passes = 0;
+  /// Laplacian passes over the principal curvatures afterwards; each replaces a value by the
+  /// mean of itself and its neighbours' mean. -1 chooses them: doubling runs of passes for as
+  /// long as a run cuts the field's relative roughness to `smoothing_tolerance` or less (noise
+  /// keeps falling, a smooth field's own variation does not), at most the limit.
+  int smoothing_passes = -1;
+  double smoothing_tolerance = 0.85;
   /// An edge whose faces' normals differ by more than this many degrees is a crease. 0 chooses
   /// it from the noise (at least 30 degrees, and well above the noise's own dihedral angles);
   /// negative: no creases.
@@ -61,6 +64,7 @@ struct CurvatureField {
   std::vector<char> on_crease;  ///< per vertex: one of its edges is a crease
   double noise = 0;         ///< estimated RMS noise along the normal, in local edge lengths
   double radius = 0;        ///< jet radius used (local edge lengths); 0 for cotangent
+  int smoothing_passes = 0; ///< Laplacian passes applied to k_max and k_min
   double crease_angle = 0;  ///< degrees; 0 when creases are off
   std::size_t crease_edges = 0;
 };

@@ -4,6 +4,8 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -12,9 +14,28 @@
 
 namespace featureline {
 
+/// How the strip is laid out in the plane.
+enum class StripFlattening {
+  /// The paper (Fig. 5): the line laid out with its edge lengths and turning angles, then the
+  /// other vertices placed outwards ring by ring by similar triangles. Errors compound with
+  /// every ring: on 20%-noisy meshes a third of an 8-ring strip's triangles come out more
+  /// than 35% stretched and are left out of the snake's domain (bench_accuracy).
+  similar_triangles,
+  /// Least-squares conformal map of the whole strip at once (one sparse solve): every
+  /// triangle as close to similar to its 3D shape as all the others allow, so noise spreads
+  /// out instead of compounding.
+  conformal,
+  /// similar_triangles where it keeps at least 99% of the strip's triangles in the snake's
+  /// domain (clean meshes: it is exact on developable strips and cheaper), conformal elsewhere.
+  automatic,
+};
+std::string to_string(StripFlattening flattening);
+std::optional<StripFlattening> parse_strip_flattening(const std::string& name);
+
 struct StripOptions {
+  StripFlattening flattening = StripFlattening::automatic;
   /// Rings of the strip around the line (the paper's k). 0 chooses from the line's length in
-  /// edges: 2 below `dense_line_edges`, 3 from it, 4 from twice, 6 from four times it.
+  /// edges: 2 below `dense_line_edges`, 3 from it, 4 from twice, 6 from four, 8 from eight times it.
   int rings = 0;
   int dense_line_edges = 12;
   /// A flattened triangle whose edge lengths differ from the surface's by more than this
@@ -52,9 +73,9 @@ struct FlatStrip {
   std::size_t worst_flip_line_index = 0;  ///< index in `line` nearest a flip, where to split
 };
 
-/// Lays the line out with its edge lengths and turning angles, then places the strip's other
-/// vertices progressively by similar triangles, averaging when several triangles place the
-/// same vertex (Fig. 5). O(strip size).
+/// Lays the strip out in the plane (StripOptions::flattening), then marks the triangles the
+/// snake may use: placed, not folded over, edges within max_edge_distortion of their 3D
+/// lengths.
 FlatStrip flatten_strip(const PreparedMesh& mesh, const FeatureStrip& strip, const StripOptions& options = {});
 
 /// The plane polyline of the line's vertices, turning angles from the surface (exposed for tests).
