@@ -98,6 +98,7 @@ std::vector<Variant> all_variants() {
         o.strip.flattening = StripFlattening::similar_triangles;
       }),
       variant("jet, fixed radius 6", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.radius = 6; }),
+      variant("jet, fixed radius 3", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.radius = 3; }),
   };
 }
 

@@ -82,8 +82,13 @@ JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::V
   // Gaussian weights, sigma = radius / 2. A compact (1 - d^2/r^2)^2 kernel was 25% faster, but
   // its smaller effective neighbourhood put the refined line on noisy ridges of 24k-245k
   // triangles 30-85% further from the crest (bench_accuracy; slightly closer on 5k).
-  auto weight_at = [](double d2) { return std::exp(-2 * d2); };
-  for (auto w : hood) n += weight_at((P[w] - P[v]).squaredNorm() * inv_r * inv_r) * N[w];
+  // One exponential per point (the frame and the fit use the same weights).
+  thread_local std::vector<double> weights;
+  weights.resize(hood.size());
+  for (std::size_t i = 0; i < hood.size(); ++i) {
+    weights[i] = std::exp(-2 * (P[hood[i]] - P[v]).squaredNorm() * inv_r * inv_r);
+    n += weights[i] * N[hood[i]];
+  }
   if (!(n.norm() > 1e-12)) n = N[v];
   if (!(n.norm() > 1e-12)) return fit;
   n.normalize();
@@ -91,10 +96,10 @@ JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::V
   Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
   double weight_sum = 0, hh = 0;
-  for (auto w : hood) {
-    const Eigen::Vector3d x = (P[w] - P[v]) * inv_r;
+  for (std::size_t i = 0; i < hood.size(); ++i) {
+    const Eigen::Vector3d x = (P[hood[i]] - P[v]) * inv_r;
     const double u = x.dot(t1), s = x.dot(t2), h = x.dot(n);
-    const double weight = weight_at(x.squaredNorm());
+    const double weight = weights[i];
     Eigen::Matrix<double, 6, 1> row;
     row << 1, u, s, u * u, u * s, s * s;
     A.noalias() += (weight * row) * row.transpose();
@@ -267,19 +272,27 @@ void mark_creases(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& ad
 // surfaces, and blurring one into the other moves the field's crest off the crease.
 void smooth_once(CurvatureField& field, const AdjacencyView& adjacency) {
   const std::size_t n = field.k_max.size();
-  for (auto* values : {&field.k_max, &field.k_min}) {
-    std::vector<double> smoothed(*values);
-    parallel_ranges(n, [&](std::size_t first, std::size_t last) {
-      for (std::size_t v = first; v < last; ++v) {
-        double sum = 0;
-        int count = 0;
-        for (auto k = adjacency.offsets[v]; k < adjacency.offsets[v + 1]; ++k)
-          if (field.crease[k] == 0) sum += (*values)[adjacency.neighbors[k]], ++count;
-        if (count > 0) smoothed[v] = 0.5 * ((*values)[v] + sum / count);
-      }
-    });
-    values->swap(smoothed);
-  }
+  // Reused between passes; referenced (not named) inside the workers, which have their own.
+  thread_local std::vector<double> buffer_max, buffer_min;
+  std::vector<double>& next_max = buffer_max;
+  std::vector<double>& next_min = buffer_min;
+  next_max.resize(n);
+  next_min.resize(n);
+  parallel_ranges(n, [&](std::size_t first, std::size_t last) {
+    for (std::size_t v = first; v < last; ++v) {
+      double sum_max = 0, sum_min = 0;
+      int count = 0;
+      for (auto k = adjacency.offsets[v]; k < adjacency.offsets[v + 1]; ++k)
+        if (field.crease[k] == 0) {
+          const auto w = adjacency.neighbors[k];
+          sum_max += field.k_max[w], sum_min += field.k_min[w], ++count;
+        }
+      next_max[v] = count > 0 ? 0.5 * (field.k_max[v] + sum_max / count) : field.k_max[v];
+      next_min[v] = count > 0 ? 0.5 * (field.k_min[v] + sum_min / count) : field.k_min[v];
+    }
+  });
+  field.k_max.swap(next_max);
+  field.k_min.swap(next_min);
 }
 
 // How rough the principal curvature fields are for their size: the median difference between
@@ -410,7 +423,7 @@ CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Ei
         fit_all(positions, normals, adjacency, on_crease, local, kProbeRadius, stride, field.mean, field);
     residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return r < 0; }), residual.end());
     field.noise = median_of(residual);
-    // Wider neighbourhoods average noise away (the variance of a fitted curvature falls as
+      // Wider neighbourhoods average noise away (the variance of a fitted curvature falls as
     // radius^-6 at a fixed density) but blur features; grow the radius with the noise only.
     field.radius = options.radius > 0 ? options.radius : std::clamp(2 + 100 * field.noise, kProbeRadius, 6.0);
     if (field.radius != kProbeRadius || stride != 1)
