@@ -134,9 +134,13 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
   };
   const auto& P = mesh.positions;
   const Eigen::Vector3d start_to_end = P[to] - P[from];  // V_{s,e}
-  const double edge = mesh.statistics.mean_edge_length;
+  // Lengths near the keys, not the mesh's mean edge: a fine part beside a coarse one would
+  // otherwise allow too few steps and call every edge near the end "within two edges".
+  const double edge = local_edge_length(mesh, to);
+  const double finest = std::min(edge, local_edge_length(mesh, from));
   // Termination guard: a sensible line is at most a few times the straight distance (in edges).
-  const std::size_t max_steps = std::size_t(8.0 * start_to_end.norm() / edge) + 64;
+  const std::size_t max_steps =
+      std::min<std::size_t>(mesh.n_vertices(), std::size_t(8.0 * start_to_end.norm() / finest) + 64);
 
   SearchScratch& seen = scratch();
   seen.begin(mesh.n_vertices());

@@ -273,4 +273,12 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   return prepared;
 }
 
+double local_edge_length(const PreparedMesh& mesh, std::uint32_t v) {
+  const auto begin = mesh.neighbor_offsets[v], end = mesh.neighbor_offsets[v + 1];
+  if (begin == end) return mesh.statistics.mean_edge_length;
+  double sum = 0;
+  for (auto k = begin; k < end; ++k) sum += mesh.neighbor_edge_lengths[k];
+  return sum / double(end - begin);
+}
+
 }  // namespace featureline

@@ -88,4 +88,9 @@ struct PreparedMesh {
 /// \throw GeometryError when no usable triangle remains.
 std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options = {});
 
+/// Mean length of v's edges: the unit of distance near v. Meshes mix edges 100 times apart
+/// in length (CAD tessellations, adaptive remeshes, separate parts), so a mesh-wide mean edge
+/// says little about the edges a line is walking on. The mesh-wide mean for isolated vertices.
+double local_edge_length(const PreparedMesh& mesh, std::uint32_t v);
+
 }  // namespace featureline

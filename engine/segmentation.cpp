@@ -909,7 +909,8 @@ SegmentationResult segment_mesh(const PreparedMesh& mesh, const std::vector<Feat
   for (std::uint32_t f = 0; f < tris0.size(); ++f)
     for (int k = 0; k < 3; ++k)
       if (across0[f][k] == kNone) on_boundary[tris0[f][k]] = on_boundary[tris0[f][(k + 1) % 3]] = 1;
-  const double attach_radius = options.attach_distance * mesh.statistics.mean_edge_length;
+  // In edge lengths where each line ends (local_edge_length), not the mesh's mean edge.
+  const double attach_distance = options.attach_distance;
   std::vector<std::string> loose_ends;  // open ends touching neither the boundary nor another line
   std::size_t fallbacks = 0;  // pieces of lines cut along edges (remesh) because the walk got lost
   std::vector<std::size_t> gaps(lines.size(), 0);  // pieces between parts of the mesh that share no edge
@@ -977,6 +978,7 @@ SegmentationResult segment_mesh(const PreparedMesh& mesh, const std::vector<Feat
           return false;
         };
         if (attached(v)) continue;
+        const double attach_radius = attach_distance * local_edge_length(mesh, v);
         const auto path = attach_radius > 0 ? paths.find(v, attached, attach_radius) : std::vector<std::uint32_t>{};
         if (path.empty()) {
           loose_ends.push_back("line " + std::to_string(i) + " ends at vertex " + std::to_string(v) +
@@ -1009,7 +1011,9 @@ SegmentationResult segment_mesh(const PreparedMesh& mesh, const std::vector<Feat
             }
           if (attached) continue;
           const Eigen::Vector3d x = position_of(mesh, l);
-          double best = attach_radius;
+          const auto& home = tris0[l.home];
+          double best = attach_distance * (local_edge_length(mesh, home[0]) + local_edge_length(mesh, home[1]) +
+                                           local_edge_length(mesh, home[2])) / 3;
           std::optional<SurfacePoint> join;
           for (std::uint32_t v = 0; v < n0; ++v)
             if (on_boundary[v] && (mesh.positions[v] - x).norm() <= best)

@@ -37,7 +37,7 @@ struct SegmentationOptions {
   /// two lines nearly meet). The merge is reported in `warnings`; false only reports them.
   bool merge_tiny_segments = false;
   /// An end of an open line that is neither on the mesh boundary nor on another line is joined
-  /// to the nearest such place when it is within this distance (in mean edge lengths), so a line
+  /// to the nearest such place when it is within this distance (in edge lengths at the end), so a line
   /// drawn from one loop to another or to a hole's rim closes its regions. 0 disables.
   double attach_distance = 2.0;
   /// remesh only: a point of the line closer than this fraction of an edge (or barycentric unit)

@@ -146,6 +146,32 @@ TEST(InitialLine, FollowsFandiskCreaseChainExactly) {
   EXPECT_EQ(line.vertices, chain);
 }
 
+TEST(InitialLine, MarchingOnAFinePartBesideACoarseOneUsesTheLocalEdgeLength) {
+  // A fine ridge (spacing 0.01) and, far away, a separate part with 1000-unit edges that make
+  // the mesh's mean edge about 100 times the ridge's. Counted in mean edges, the 160-edge walk
+  // along the ridge was "too long" and every vertex "within two edges" of the end key.
+  const auto fine = make_ridge_field(201, 0.2, 3, 0.3, 0.25, 0.3);
+  RawMesh raw = fine.mesh;
+  const auto offset = std::uint32_t(raw.positions.size());
+  for (int i = 0; i < 40; ++i) {
+    const double a = 2 * 3.14159265358979 * i / 40;
+    raw.positions.push_back({1e4 + 1000 * std::cos(a), 1000 * std::sin(a), 0.0});
+  }
+  raw.positions.push_back({1e4, 0.0, 0.0});
+  for (std::uint32_t i = 0; i < 40; ++i) raw.triangles.push_back({offset + 40, offset + i, offset + (i + 1) % 40});
+  const auto mesh = prepare_mesh(raw);
+  ASSERT_GT(mesh->statistics.mean_edge_length, 20 * local_edge_length(*mesh, 0));
+  InitialLineOptions marching;
+  marching.method = InitialMethod::marching;
+  marching.fallback = false;
+  const auto line = find_initial_line(*mesh, keys_on_crest(fine, {-0.8, 0.8}), false, marching);
+  EXPECT_TRUE(line.fallbacks.empty());
+  EXPECT_GT(line.vertices.size(), 100u);
+  std::vector<Eigen::Vector3d> points;
+  for (auto v : line.vertices) points.push_back(mesh->positions[v]);
+  EXPECT_LT(crest_distance(fine, points).mean / fine.spacing, 3.0);  // marching's usual accuracy
+}
+
 TEST(InitialLine, BadKeysAreClearErrors) {
   const auto mesh = prepare_mesh(make_icosphere(1.0, 2));
   EXPECT_THROW(find_initial_line(*mesh, {0}, false), InvalidInputError);
