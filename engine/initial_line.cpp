@@ -125,6 +125,29 @@ double path_length(const PreparedMesh& mesh, const std::vector<std::uint32_t>& p
   return length;
 }
 
+// Creases steer the marching as they steer the feature path: between two keys on creases, a
+// crease edge out of the current vertex is the feature whatever the curvature ranks say, and an
+// edge joining two crease vertices without being a crease is a chord across a face (on a CAD
+// cap's skinny triangles it cuts the rounded corner). Keeps the crease candidates when there
+// are any, else drops the chords when anything else is left.
+void keep_crease_candidates(const PreparedMesh& mesh, std::uint32_t current, std::uint32_t goal,
+                            std::vector<std::uint32_t>& candidates) {
+  const auto& on_crease = mesh.curvature.on_crease;
+  if (on_crease.empty() || !on_crease[current] || !on_crease[goal]) return;
+  auto is_crease_edge = [&](std::uint32_t v) {
+    for (auto k = mesh.neighbor_offsets[current]; k < mesh.neighbor_offsets[current + 1]; ++k)
+      if (mesh.neighbors[k] == v) return mesh.curvature.crease[k] != 0;
+    return false;
+  };
+  std::vector<std::uint32_t> creases, others;
+  for (auto v : candidates) {
+    if (is_crease_edge(v)) creases.push_back(v);
+    else if (!on_crease[v]) others.push_back(v);
+  }
+  if (!creases.empty()) candidates.swap(creases);
+  else if (!others.empty()) candidates.swap(others);
+}
+
 std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
                                                           const InitialLineOptions& options, std::string* failure,
                                                           const std::vector<std::uint32_t>* blocked) {
@@ -170,6 +193,7 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
       if (!seen.seen(v) && !is_blocked(blocked, v)) candidates.push_back(v);
     }
     if (candidates.empty()) return fail("marching ran into a dead end (every neighbour already visited)");
+    keep_crease_candidates(mesh, current, to, candidates);
 
     const Eigen::Vector3d previous_direction =
         path.size() >= 2 ? Eigen::Vector3d(P[current] - P[path[path.size() - 2]]) : start_to_end;  // V_{pre,c}

@@ -7,6 +7,7 @@
 #include "engine/errors.h"
 #include "engine/initial_line.h"
 #include "engine/mesh_io.h"
+#include "tests/support/accuracy_meshes.h"
 #include "tests/support/line_metrics.h"
 #include "tests/support/shared_data.h"
 #include "tests/support/synthetic_meshes.h"
@@ -144,6 +145,27 @@ TEST(InitialLine, FollowsFandiskCreaseChainExactly) {
   const std::vector<std::uint32_t> keys{chain.front(), chain.back()};
   const auto line = find_initial_line(*mesh, keys, false);
   EXPECT_EQ(line.vertices, chain);
+}
+
+TEST(InitialLine, MarchingFollowsEveryFandiskCreaseChain) {
+  // The paper's marching search, keys at each open chain's ends and middle: between keys on
+  // creases a crease edge out of the current vertex wins over the curvature ranks (without
+  // that rule it left these chains by 0.4 edge lengths on average, 5.4 at worst).
+  const std::string path = require_shared_mesh("fandisk.off");
+  if (path.empty()) return;
+  const RawMesh raw = read_mesh_file(path);
+  const auto mesh = prepare_mesh(raw);
+  InitialLineOptions marching;
+  marching.method = InitialMethod::marching;
+  std::size_t checked = 0;
+  for (const auto& chain : find_crease_chains(raw, 30, 10)) {
+    if (chain.closed) continue;
+    const auto& v = chain.vertices;
+    const auto line = find_initial_line(*mesh, {v.front(), v[v.size() / 2], v.back()}, false, marching);
+    EXPECT_EQ(line.vertices, v);
+    ++checked;
+  }
+  EXPECT_GE(checked, 10u);
 }
 
 TEST(InitialLine, MarchingOnAFinePartBesideACoarseOneUsesTheLocalEdgeLength) {
