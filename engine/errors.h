@@ -38,6 +38,12 @@ class GeometryError : public Error {
   using Error::Error;
 };
 
+/// The caller cancelled the work, or its deadline passed, before it finished (engine/cancellation.h). (HTTP 503)
+class CancelledError : public Error {
+ public:
+  using Error::Error;
+};
+
 /// The input exceeds a configured limit (vertex count, byte size). (HTTP 413)
 class LimitExceededError : public Error {
  public:

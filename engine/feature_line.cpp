@@ -87,7 +87,7 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   result.keys = request.keys;
   result.closed = request.closed;
 
-  result.initial = find_initial_line(pm, request.keys, request.closed, options.initial);
+  result.initial = find_initial_line(pm, request.keys, request.closed, options.initial, request.cancel);
   result.warnings = result.initial.warnings;
   for (auto v : result.initial.vertices) result.initial_points.push_back(pm.positions[v]);
   result.timings.initial_ms = ms_since(start);
@@ -135,6 +135,7 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
 
   std::vector<SurfacePoint>& refined = result.refined;
   while (!pieces.empty()) {
+    throw_if_cancelled(request.cancel);
     const Piece piece = pieces.front();
     pieces.pop_front();
     const std::vector<std::uint32_t> sub(line.begin() + std::ptrdiff_t(piece.begin), line.begin() + std::ptrdiff_t(piece.end) + 1);
@@ -175,7 +176,7 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
                                   std::to_string(sub.back()) + " folds over when flattened; refined where it is valid");
       t0 = Clock::now();
       try {
-        const SnakeResult snake = refine_with_snake(pm, strip, flat, snake_options);
+        const SnakeResult snake = refine_with_snake(pm, strip, flat, snake_options, request.cancel);
         points = map_to_surface(pm, strip, snake.points);
         result.iterations += snake.iterations;
         report.iterations = snake.iterations;

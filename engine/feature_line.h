@@ -39,6 +39,8 @@ struct FeatureLineRequest {
   std::vector<std::uint32_t> keys;
   bool closed = false;
   FeatureLineOptions options;
+  /// Stops the work early with CancelledError when requested (deadline, client gone); null: never.
+  const Cancellation* cancel = nullptr;
 };
 
 /// How one piece of the line (between pinned points) was produced.

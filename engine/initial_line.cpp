@@ -150,7 +150,7 @@ void keep_crease_candidates(const PreparedMesh& mesh, std::uint32_t current, std
 
 std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
                                                           const InitialLineOptions& options, std::string* failure,
-                                                          const std::vector<std::uint32_t>* blocked) {
+                                                          const std::vector<std::uint32_t>* blocked, const Cancellation* cancel) {
   auto fail = [&](std::string why) -> std::optional<std::vector<std::uint32_t>> {
     if (failure != nullptr) *failure = std::move(why);
     return std::nullopt;
@@ -185,6 +185,7 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
         path.push_back(to);
         return path;
       }
+    if ((path.size() & 1023) == 0) throw_if_cancelled(cancel);
     if (path.size() > max_steps)
       return fail("marching did not reach the end key within " + std::to_string(max_steps) + " steps");
     candidates.clear();
@@ -247,7 +248,8 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
 std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
                                                              bool feature_weighted, const InitialLineOptions& options,
                                                              double feature_sign,
-                                                             const std::vector<std::uint32_t>* blocked) {
+                                                             const std::vector<std::uint32_t>* blocked,
+                                                             const Cancellation* cancel) {
   const auto& P = mesh.positions;
   const double floor = feature_weighted ? std::clamp(options.feature_weight_floor, 1e-6, 1.0) : 1.0;
   SearchScratch& s = scratch();
@@ -261,11 +263,13 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
   s.parent[from] = from;
   s.stamp[from] = s.generation;
   open.emplace(heuristic(from), from);
+  std::size_t settled = 0;
   while (!open.empty()) {
     const auto [priority, v] = open.top();
     open.pop();
     if (s.closed(v)) continue;
     s.closed_stamp[v] = s.generation;
+    if ((++settled & 4095) == 0) throw_if_cancelled(cancel);
     if (v == to) break;
     const double strength_v = feature_weighted ? feature_strength(mesh, v, feature_sign) : 0;
     for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) {
@@ -301,7 +305,8 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
 }
 
 InitialLineResult find_initial_line(const PreparedMesh& mesh, const std::vector<std::uint32_t>& keys, bool closed,
-                                    const InitialLineOptions& options) {
+                                    const InitialLineOptions& options, const Cancellation* cancel) {
+  throw_if_cancelled(cancel);
   if (keys.size() < 2) throw InvalidInputError("a feature line needs at least two keys");
   if (closed && keys.size() < 2) throw InvalidInputError("a closed feature line needs at least two keys");
   for (std::size_t i = 0; i < keys.size(); ++i) {
@@ -344,7 +349,7 @@ InitialLineResult find_initial_line(const PreparedMesh& mesh, const std::vector<
     std::optional<std::vector<std::uint32_t>> path;
     if (options.method == InitialMethod::marching) {
       std::string why;
-      path = marching_search(mesh, a, b, options, &why, &blocked);
+      path = marching_search(mesh, a, b, options, &why, &blocked, cancel);
       if (!path) {
         if (!options.fallback)
           throw GeometryError("marching search failed between keys " + std::to_string(seg) + " and " +
@@ -354,10 +359,10 @@ InitialLineResult find_initial_line(const PreparedMesh& mesh, const std::vector<
     }
     if (!path) {
       const bool weighted = options.method != InitialMethod::geodesic;
-      path = shortest_edge_path(mesh, a, b, weighted, options, sign, &blocked);
+      path = shortest_edge_path(mesh, a, b, weighted, options, sign, &blocked, cancel);
       if (!path) {
         // The blocked vertices may wall the end off (e.g. a loop through a narrow part).
-        path = shortest_edge_path(mesh, a, b, weighted, options, sign, nullptr);
+        path = shortest_edge_path(mesh, a, b, weighted, options, sign, nullptr, cancel);
         if (path)
           result.warnings.push_back("segment " + std::to_string(seg) +
                                     " had to cross the line's earlier segments to reach its end key");

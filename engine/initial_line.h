@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/cancellation.h"
 #include "engine/prepared_mesh.h"
 
 namespace featureline {
@@ -66,14 +67,16 @@ struct InitialLineResult {
 /// Consecutive segments avoid vertices already used, so a loop does not retrace itself.
 /// \throw InvalidInputError for ids out of range, fewer than two keys or repeated consecutive keys;
 ///        GeometryError when keys lie on different components or on unreferenced vertices.
+/// \throw CancelledError once `cancel` is requested.
 InitialLineResult find_initial_line(const PreparedMesh& mesh, const std::vector<std::uint32_t>& keys, bool closed,
-                                    const InitialLineOptions& options = {});
+                                    const InitialLineOptions& options = {}, const Cancellation* cancel = nullptr);
 
 /// The marching feature search from `from` to `to` alone (no fallback). Returns the path
 /// (both ends included) or std::nullopt with `failure` set to the reason.
 std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
                                                           const InitialLineOptions& options, std::string* failure = nullptr,
-                                                          const std::vector<std::uint32_t>* blocked = nullptr);
+                                                          const std::vector<std::uint32_t>* blocked = nullptr,
+                                                          const Cancellation* cancel = nullptr);
 
 /// Minimal edge path from `from` to `to` (A*). `feature_weighted` selects the feature_path cost,
 /// `blocked` (sorted ids) lists vertices to avoid in both searches, ends excepted.
@@ -81,7 +84,8 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
 std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
                                                              bool feature_weighted, const InitialLineOptions& options,
                                                              double feature_sign = 0,
-                                                             const std::vector<std::uint32_t>* blocked = nullptr);
+                                                             const std::vector<std::uint32_t>* blocked = nullptr,
+                                                             const Cancellation* cancel = nullptr);
 
 /// Feature strength in [0, 1] of vertex v: its feature value for lines of `feature_sign`
 /// (engine/curvature.h) over the mesh's curvature scale, clamped.

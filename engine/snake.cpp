@@ -250,7 +250,7 @@ StripPoint locate_by_walking(const FeatureStrip& strip, const FlatStrip& flat, s
 }
 
 SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip, const FlatStrip& flat,
-                              const SnakeOptions& o) {
+                              const SnakeOptions& o, const Cancellation* cancel) {
   if (!(o.alpha >= 0) || !(o.beta >= 0) || !(o.tau > 0) || !(o.kappa >= 0) || !(o.exponent > 0) || !(o.spacing > 0.01) ||
       o.max_iterations < 0 || o.resample_every < 1 || !(o.max_step > 0) || !(o.curvature_cap > 0))
     throw InvalidInputError("snake options out of range (alpha, beta, kappa >= 0; tau, exponent, max_step > 0; spacing > 0.01)");
@@ -408,6 +408,7 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
   std::vector<Eigen::Vector2d> window_start;
   double last_change = HUGE_VAL;
   for (int iteration = 0; iteration < o.max_iterations; ++iteration) {
+    throw_if_cancelled(cancel);
     if (iteration % o.resample_every == 0) resample();
     const std::size_t n = points.size();
     if (n <= 2) {

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include "engine/cancellation.h"
 #include "engine/feature_strip.h"
 #include "engine/prepared_mesh.h"
 
@@ -91,8 +92,9 @@ struct SnakeResult {
 
 /// Refines the strip's line; both ends of the line stay pinned. The line's points never
 /// leave the strip: a point pushed past the strip's border stops on it.
+/// \throw CancelledError once `cancel` is requested (checked every iteration).
 SnakeResult refine_with_snake(const PreparedMesh& mesh, const FeatureStrip& strip, const FlatStrip& flat,
-                              const SnakeOptions& options = {});
+                              const SnakeOptions& options = {}, const Cancellation* cancel = nullptr);
 
 /// A point of the refined line on the original surface.
 struct SurfacePoint {

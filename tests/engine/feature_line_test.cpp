@@ -156,5 +156,30 @@ TEST(FeatureLine, ExtremeKappaRegressionIsBoundedInPoints) {
   EXPECT_EQ(result.pieces, 6u);
 }
 
+TEST(FeatureLine, CancellationStopsTheWork) {
+  const auto field = make_ridge_field(61, 0.2, 2, 0.3, 0.25, 0.3);
+  const auto mesh = prepare_mesh(field.mesh);
+  FeatureLineRequest request;
+  request.keys = keys_on_crest(field, {-0.8, 0.0, 0.8});
+  // Cancelled before it starts: nothing is computed.
+  Cancellation cancelled;
+  cancelled.cancel();
+  request.cancel = &cancelled;
+  EXPECT_THROW(detect_feature_line(*mesh, request), CancelledError);
+  // A deadline passing inside the snake: these options ask for 100,000 iterations that never
+  // converge (issue 14: many seconds of engine time for one small line); the work stops
+  // instead of finishing.
+  request.options.snake.max_iterations = 100000;
+  request.options.snake.tolerance = 0;
+  request.options.snake.spacing = 0.05;
+  const Cancellation deadline(Cancellation::Clock::now() + std::chrono::milliseconds(50));
+  request.cancel = &deadline;
+  EXPECT_THROW(detect_feature_line(*mesh, request), CancelledError);
+  // Without a cancellation the same request runs (capped at fewer iterations here).
+  request.cancel = nullptr;
+  request.options.snake.max_iterations = 50;
+  EXPECT_NO_THROW(detect_feature_line(*mesh, request));
+}
+
 }  // namespace
 }  // namespace featureline
