@@ -402,7 +402,7 @@ FlatStrip flatten_strip(const PreparedMesh& pm, const FeatureStrip& strip, const
     // Automatic: the paper's layout is exact on developable strips and costs a fraction of a
     // sparse solve; only where it drops triangles from the snake's domain is the solve worth it.
     const double dropped = double(paper.distorted_triangles + paper.flipped_triangles);
-    if (options.flattening == StripFlattening::similar_triangles || dropped <= 0.01 * double(strip.triangles.size()))
+    if (options.flattening == StripFlattening::similar_triangles || dropped <= 0.05 * double(strip.triangles.size()))
       return paper;
   }
   FlatStrip conformal = unplaced();
