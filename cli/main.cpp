@@ -54,6 +54,11 @@ detect options:
   --smooth-curvature N    Laplacian passes over the curvature field (-1: automatic, the default)
   --options JSON          any options as a JSON object (see api/openapi.yaml); flags win
   --out FILE              write FILE.json or FILE.glb instead of printing JSON
+
+reading limits (every command):
+  --max-triangles N       refuse meshes that expand to more triangles (glTF: over all node
+                          instances and primitives); default 8388608, the server's default
+  --max-vertices N        the same for vertex records; default 8388608
 )";
 
 struct UsageError : std::runtime_error {
@@ -88,6 +93,12 @@ int parse_int(const std::string& text, const char* flag) {
   return int(v);
 }
 
+std::size_t parse_count(const std::string& text, const char* flag) {
+  const double v = parse_number(text, flag);
+  if (!(v >= 1 && v <= 4e9) || v != double(std::size_t(v))) throw UsageError(std::string(flag) + " expects an integer from 1 to 4000000000");
+  return std::size_t(v);
+}
+
 bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
@@ -106,6 +117,10 @@ int run(int argc, char** argv) {
   featureline::PrepareOptions prepare_options;
   std::vector<std::pair<std::string, bool>> segment_lines;  // keys, closed
   std::string mode_text = "snap";
+  // The server's default limits (--max-upload-mb 256, --cache-mb 1024): a mesh the server would
+  // refuse is refused here too, before a small glTF file can expand into gigabytes.
+  featureline::ReadMeshOptions read_options = featureline::read_limits_for(std::size_t(256) << 20, std::size_t(1) << 30);
+  read_options.max_file_bytes = featureline::ReadMeshOptions{}.max_file_bytes;
   for (int i = 3; i < argc; ++i) {
     const std::string flag = argv[i];
     auto value = [&]() -> std::string {
@@ -152,6 +167,8 @@ int run(int argc, char** argv) {
       for (auto it = given.begin(); it != given.end(); ++it)
         if (!options.contains(it.key())) options[it.key()] = it.value();
     } else if (flag == "--out") out_path = value();
+    else if (flag == "--max-triangles") read_options.max_triangles = parse_count(value(), "--max-triangles");
+    else if (flag == "--max-vertices") read_options.max_vertices = parse_count(value(), "--max-vertices");
     else if (flag == "-h" || flag == "--help") throw UsageError("");
     else throw UsageError("unknown option \"" + flag + "\"");
   }
@@ -162,7 +179,7 @@ int run(int argc, char** argv) {
   }
 
   const auto load_start = std::chrono::steady_clock::now();
-  featureline::RawMesh raw = featureline::read_mesh_file(mesh_path);
+  featureline::RawMesh raw = featureline::read_mesh_file(mesh_path, read_options);
   const double load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start).count();
   const auto mesh = featureline::prepare_mesh(std::move(raw), prepare_options);
 

@@ -367,7 +367,8 @@ RawMesh read_obj(std::string_view bytes, const ReadMeshOptions& options) {
                                 ") uses vertex index 0, but OBJ indices start at 1.");
         }
         if (index < 0) {
-          if (-index > defined) {
+          // Compared as index < -defined: negating index itself overflows for INT64_MIN.
+          if (index < -defined) {
             throw MeshFormatError("OBJ face " + std::to_string(face) + " (line " + std::to_string(line_no) +
                                   ") uses relative vertex index " + std::to_string(index) + " but only " +
                                   std::to_string(defined) + " vertices precede it.");
@@ -546,6 +547,18 @@ RawMesh read_stl(std::string_view bytes, const ReadMeshOptions& options) {
 }  // namespace detail
 
 // ---- entry points ---------------------------------------------------------------------
+
+ReadMeshOptions read_limits_for(std::size_t max_input_bytes, std::size_t memory_budget_bytes) {
+  constexpr std::size_t min_bytes_per_element = 12;
+  constexpr std::size_t min_prepared_bytes_per_triangle = 128;
+  const std::size_t elements =
+      std::max<std::size_t>(1, std::min(max_input_bytes / min_bytes_per_element, memory_budget_bytes / min_prepared_bytes_per_triangle));
+  ReadMeshOptions options;
+  options.max_vertices = std::min(options.max_vertices, elements);
+  options.max_triangles = std::min(options.max_triangles, elements);
+  options.max_file_bytes = max_input_bytes;
+  return options;
+}
 
 RawMesh read_mesh(std::string_view bytes, MeshFormat format, const ReadMeshOptions& options) {
   const std::string name = detail::display_name(format);

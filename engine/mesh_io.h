@@ -42,6 +42,16 @@ struct ReadMeshOptions {
   std::size_t max_file_bytes = std::size_t(2) << 30;
 };
 
+/// Limits that tie how far a mesh may expand to what the caller accepts. No uncompressed
+/// encoding stores a vertex position or a triangle in fewer than 12 bytes (three floats, three
+/// 32-bit indices), so an honest input of `max_input_bytes` holds at most max_input_bytes / 12 of
+/// each (only Draco compresses further); and a prepared mesh counts well over 128 bytes per
+/// triangle against a cache budget (PreparedMesh::memory_bytes: 162-174 measured), so a mesh above
+/// `memory_budget_bytes` / 128 triangles could never be kept anyway. Both vertex records and triangles are capped at the smaller figure. Inputs that
+/// expand further (glTF nodes instancing one mesh many times, primitives sharing one accessor)
+/// are then refused with LimitExceededError before their geometry is allocated.
+ReadMeshOptions read_limits_for(std::size_t max_input_bytes, std::size_t memory_budget_bytes);
+
 /// A triangle soup with ids as described above; no topology yet (see prepare_mesh).
 struct RawMesh {
   MeshFormat format = MeshFormat::obj;

@@ -20,9 +20,12 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <map>
+#include <set>
+#include <tuple>
 #include <nlohmann/json.hpp>
 
 #include "engine/errors.h"
@@ -418,6 +421,87 @@ PrimitiveGeometry load_primitive(const tinygltf::Model& model, const tinygltf::P
   return g;
 }
 
+// ---- expansion through instances and shared accessors -----------------------------------
+
+/// What a primitive adds to the scene, from its accessors' counts alone (nothing is read or
+/// allocated), so that a scene instancing one mesh many times, or listing many primitives over one
+/// accessor, is refused before it is expanded. Counts that do not add up (missing or invalid
+/// accessors) give 0 here; load_primitive reports them. Draco primitives are checked again once
+/// decoded, since their accessors' counts are only declarations.
+struct PrimitiveExtent {
+  std::size_t vertex_records = 0;
+  std::size_t triangles = 0;
+};
+
+// Declared counts come from the file and may be near SIZE_MAX: sums saturate instead of wrapping.
+std::size_t saturating_add(std::size_t a, std::size_t b) { return b > SIZE_MAX - a ? SIZE_MAX : a + b; }
+
+std::size_t accessor_count(const tinygltf::Model& model, int index) {
+  if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size()) return 0;
+  return model.accessors[static_cast<std::size_t>(index)].count;
+}
+
+PrimitiveExtent primitive_extent(const tinygltf::Model& model, const tinygltf::Primitive& primitive) {
+  const int mode = primitive.mode < 0 ? TINYGLTF_MODE_TRIANGLES : primitive.mode;
+  if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) return {};
+  const auto position = primitive.attributes.find("POSITION");
+  PrimitiveExtent extent;
+  extent.vertex_records = position == primitive.attributes.end() ? 0 : accessor_count(model, position->second);
+  const std::size_t corners = primitive.indices >= 0 ? accessor_count(model, primitive.indices) : extent.vertex_records;
+  extent.triangles = mode == TINYGLTF_MODE_TRIANGLES ? corners / 3 : (corners >= 3 ? corners - 2 : 0);
+  return extent;
+}
+
+/// Refuses a scene whose expansion passes the configured limits, saying that it is the expansion.
+void check_expansion(MeshFormat format, std::size_t vertex_records, std::size_t triangles, std::size_t instances,
+                     const ReadMeshOptions& options) {
+  if (instances <= 1) {  // nothing is multiplied: the reader's plain limits and messages
+    check_vertex_limit(format, vertex_records, options);
+    check_triangle_limit(format, triangles, options);
+    return;
+  }
+  const auto refuse = [&](std::size_t limit, const char* what, const char* flag) {
+    throw LimitExceededError(std::string(display_name(format)) + " scene expands to more than " + std::to_string(limit) + " " +
+                             what + " through its node instances and primitives (" + std::to_string(instances) +
+                             " primitive instances so far); the configured limit is " + std::to_string(limit) + " (" + flag + ").");
+  };
+  const std::size_t vertex_limit = std::min<std::size_t>(options.max_vertices, std::numeric_limits<std::uint32_t>::max());
+  if (vertex_records > vertex_limit) refuse(vertex_limit, "vertices", "--max-vertices");
+  if (triangles > options.max_triangles) refuse(options.max_triangles, "triangles", "--max-triangles");
+}
+
+/// Primitives that read the same data decode to the same geometry: the cache key is the data, not
+/// the primitive, so a file listing one accessor under many primitives holds one copy.
+struct GeometryKey {
+  int draco_view = -1;
+  int draco_position = -1;
+  int position_accessor = -1;
+  int index_accessor = -1;
+  int mode = TINYGLTF_MODE_TRIANGLES;
+  bool operator<(const GeometryKey& o) const {
+    return std::tie(draco_view, draco_position, position_accessor, index_accessor, mode) <
+           std::tie(o.draco_view, o.draco_position, o.position_accessor, o.index_accessor, o.mode);
+  }
+};
+
+GeometryKey geometry_key(const tinygltf::Primitive& primitive) {
+  GeometryKey key;
+  key.mode = primitive.mode < 0 ? TINYGLTF_MODE_TRIANGLES : primitive.mode;
+  const auto draco = primitive.extensions.find(std::string(draco_extension));
+  if (draco != primitive.extensions.end() && draco->second.IsObject()) {
+    const tinygltf::Value& ext = draco->second;
+    if (ext.Has("bufferView")) key.draco_view = value_as_int(ext.Get("bufferView")).value_or(-2);
+    if (ext.Has("attributes") && ext.Get("attributes").IsObject() && ext.Get("attributes").Has("POSITION")) {
+      key.draco_position = value_as_int(ext.Get("attributes").Get("POSITION")).value_or(-2);
+    }
+    return key;
+  }
+  const auto position = primitive.attributes.find("POSITION");
+  key.position_accessor = position == primitive.attributes.end() ? -1 : position->second;
+  key.index_accessor = primitive.indices;
+  return key;
+}
+
 // ---- node transforms ------------------------------------------------------------------
 
 Eigen::Matrix4d local_transform(const tinygltf::Node& node, int index, MeshFormat format) {
@@ -521,8 +605,10 @@ RawMesh read_gltf(std::string_view bytes, bool binary, const ReadMeshOptions& op
   mesh.welded = true;
   PositionWelder welder(mesh.positions);
   Counters counters;
-  std::map<std::pair<int, int>, PrimitiveGeometry> cache;
+  std::map<GeometryKey, PrimitiveGeometry> cache;
   std::size_t vertex_records = 0;
+  std::size_t instances = 0;
+  std::set<std::pair<int, int>> skipped_seen;
 
   const auto emit_mesh = [&](int mesh_index, const Eigen::Matrix4d& world) {
     if (mesh_index < 0 || static_cast<std::size_t>(mesh_index) >= model.meshes.size()) {
@@ -531,17 +617,26 @@ RawMesh read_gltf(std::string_view bytes, bool binary, const ReadMeshOptions& op
     const tinygltf::Mesh& gmesh = model.meshes[static_cast<std::size_t>(mesh_index)];
     const bool flip = world.block<3, 3>(0, 0).determinant() < 0.0;  // mirrored instance: winding flips
     for (std::size_t p = 0; p < gmesh.primitives.size(); ++p) {
-      const auto key = std::make_pair(mesh_index, static_cast<int>(p));
+      const tinygltf::Primitive& primitive = gmesh.primitives[p];
+      const PrimitiveExtent declared = primitive_extent(model, primitive);
+      check_expansion(format, saturating_add(vertex_records, declared.vertex_records),
+                      saturating_add(mesh.triangles.size(), declared.triangles), instances + 1, options);
+      const GeometryKey key = geometry_key(primitive);
       auto it = cache.find(key);
-      if (it == cache.end()) {
+      const bool loaded_now = it == cache.end();
+      if (loaded_now) {
         const std::string context = name + " mesh " + std::to_string(mesh_index) + " primitive " + std::to_string(p);
-        it = cache.emplace(key, load_primitive(model, gmesh.primitives[p], format, context, options, counters)).first;
+        it = cache.emplace(key, load_primitive(model, primitive, format, context, options, counters)).first;
       }
       const PrimitiveGeometry& g = it->second;
-      if (g.skipped) continue;
+      if (g.skipped) {
+        // Counted once per primitive of the file (load_primitive counted the first one).
+        if (skipped_seen.insert({mesh_index, static_cast<int>(p)}).second && !loaded_now) ++counters.skipped_primitives;
+        continue;
+      }
+      ++instances;
       vertex_records += g.positions.size();
-      check_vertex_limit(format, vertex_records, options);
-      check_triangle_limit(format, mesh.triangles.size() + g.triangles.size(), options);
+      check_expansion(format, vertex_records, mesh.triangles.size() + g.triangles.size(), instances, options);
       std::vector<std::uint32_t> remap(g.positions.size());
       for (std::size_t v = 0; v < g.positions.size(); ++v) {
         const Eigen::Vector4d q = world * Eigen::Vector4d(g.positions[v][0], g.positions[v][1], g.positions[v][2], 1.0);
@@ -566,7 +661,13 @@ RawMesh read_gltf(std::string_view bytes, bool binary, const ReadMeshOptions& op
     throw MeshFormatError(name + " file's default scene " + std::to_string(scene) + " does not exist.");
   }
   if (scene < 0 && !model.scenes.empty()) scene = 0;
-  if (scene >= 0) {
+  // Calls visit(mesh index, world transform) for every mesh instance of the scene (or every mesh
+  // once when the file has no scene).
+  const auto for_each_instance = [&](const auto& visit) {
+    if (scene < 0) {
+      for (std::size_t m = 0; m < model.meshes.size(); ++m) visit(static_cast<int>(m), Eigen::Matrix4d::Identity());
+      return;
+    }
     // Depth-first over the scene's node trees with an explicit stack; a node reached twice means
     // the hierarchy is not a tree (cycles, shared children), which glTF forbids.
     std::vector<char> visited(model.nodes.size(), 0);
@@ -585,12 +686,26 @@ RawMesh read_gltf(std::string_view bytes, bool binary, const ReadMeshOptions& op
       visited[static_cast<std::size_t>(index)] = 1;
       const tinygltf::Node& node = model.nodes[static_cast<std::size_t>(index)];
       const Eigen::Matrix4d world = parent * local_transform(node, index, format);
-      if (node.mesh >= 0) emit_mesh(node.mesh, world);
+      if (node.mesh >= 0) visit(node.mesh, world);
       for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.emplace_back(*c, world);
     }
-  } else {
-    for (std::size_t m = 0; m < model.meshes.size(); ++m) emit_mesh(static_cast<int>(m), Eigen::Matrix4d::Identity());
-  }
+  };
+
+  // First the declared size of the whole expansion, so that a small file instancing a mesh many
+  // times is refused before any geometry is read or allocated.
+  PrimitiveExtent declared;
+  std::size_t declared_instances = 0;
+  for_each_instance([&](int mesh_index, const Eigen::Matrix4d&) {
+    if (mesh_index < 0 || static_cast<std::size_t>(mesh_index) >= model.meshes.size()) return;  // reported below
+    for (const tinygltf::Primitive& primitive : model.meshes[static_cast<std::size_t>(mesh_index)].primitives) {
+      const PrimitiveExtent extent = primitive_extent(model, primitive);
+      declared.vertex_records = saturating_add(declared.vertex_records, extent.vertex_records);
+      declared.triangles = saturating_add(declared.triangles, extent.triangles);
+      ++declared_instances;
+    }
+    check_expansion(format, declared.vertex_records, declared.triangles, declared_instances, options);
+  });
+  for_each_instance(emit_mesh);
 
   if (counters.skipped_primitives > 0) {
     mesh.warnings.push_back(name + " file has " + std::to_string(counters.skipped_primitives) +

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Every test: a Release build with warnings, then the same tests under AddressSanitizer and
-# UndefinedBehaviorSanitizer. Prints ctest's summary line for each.
+# UndefinedBehaviorSanitizer, then the libFuzzer harnesses (a clang build). Prints ctest's
+# summary line for each.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
@@ -12,4 +13,9 @@ BUILD_DIR=build-sanitize scripts/setup.sh -DFEATURELINE_SANITIZE=ON -DFEATURELIN
 # The browser test runs once, against the Release server (it drives Chromium, not our code).
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-sanitize --output-on-failure -j "$(nproc)" -LE web || status=1
+echo "== fuzzing (libFuzzer + ASan + UBSan): every harness over its seeds and a fixed number of mutations"
+# scripts/fuzz.sh NAME SECONDS runs one harness for longer.
+BUILD_DIR=build-fuzz scripts/setup.sh -DCMAKE_CXX_COMPILER=clang++ -DFEATURELINE_FUZZ=ON -DFEATURELINE_SANITIZE=ON \
+  -DFEATURELINE_BUILD_BENCH=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS=-fsanitize=fuzzer-no-link
+ctest --test-dir build-fuzz --output-on-failure -j "$(nproc)" || status=1
 exit $status

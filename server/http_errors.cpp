@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdio>
 #include <new>
 
 #include "engine/errors.h"
@@ -9,7 +10,27 @@
 namespace featureline::server {
 
 std::string ErrorReply::body() const {
-  return nlohmann::json{{"error", {{"code", code}, {"message", message}}}}.dump();
+  // replace: a message with invalid UTF-8 (from any path that forgot quote_client_text) must
+  // still serialise; a throw here once skipped the close-after-refusal (issue 10).
+  return nlohmann::json{{"error", {{"code", code}, {"message", message}}}}.dump(-1, ' ', false,
+                                                                               nlohmann::json::error_handler_t::replace);
+}
+
+std::string quote_client_text(std::string_view text) {
+  constexpr std::size_t shown = 64;
+  std::string out;
+  for (std::size_t i = 0; i < text.size() && i < shown; ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c >= 0x20 && c < 0x7f && c != '\\') {
+      out += char(c);
+    } else {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\x%02X", c);
+      out += escaped;
+    }
+  }
+  if (text.size() > shown) out += "...";
+  return out;
 }
 
 ErrorReply error_reply(std::exception_ptr error) {
@@ -28,6 +49,8 @@ ErrorReply error_reply(std::exception_ptr error) {
     r = {400, "invalid_request", e.what(), {}};
   } catch (const GeometryError& e) {
     r = {422, "unprocessable_geometry", e.what(), {}};
+  } catch (const CancelledError& e) {
+    r = {503, "deadline_exceeded", e.what(), {{"Retry-After", "5"}}};
   } catch (const nlohmann::json::exception& e) {
     // nlohmann prefixes its messages with "[json.exception.parse_error.101] "; keep the sentence.
     std::string what = e.what();

@@ -5,6 +5,7 @@
 #include <exception>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 #include <utility>
 
@@ -33,6 +34,11 @@ struct ErrorReply {
   std::vector<std::pair<std::string, std::string>> headers;
   std::string body() const;  ///< the JSON document
 };
+
+/// Client-supplied text for an error message: printable ASCII kept, every other byte as \xHH,
+/// at most 64 characters. Error messages must be valid UTF-8 (JSON cannot carry anything else),
+/// and a client's bytes must not be able to break the error path.
+std::string quote_client_text(std::string_view text);
 
 /// Maps any exception (HttpError, engine errors, JSON errors, bad_alloc, others) to a reply.
 /// Unknown exceptions become 500 without their text, so internals never leak to clients.

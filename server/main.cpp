@@ -22,6 +22,13 @@ const char* const kUsage = R"(usage: featureline-server [options]
   --ttl-s T           idle seconds before a mesh session expires (default 1800)
   --max-upload-mb U   largest accepted upload (default 256)
   --deadline-s S      longest a request may wait for the engine (default 30)
+  --max-connections C open connections (served + waiting for a worker); beyond, 503 at once
+                      (default 2 x --http-threads)
+  --head-timeout-s T  a request's headers must arrive within T s of its first byte (default 10)
+  --max-triangles N   an upload may expand to at most N triangles (glTF: over all node instances
+                      and primitives); default min(upload limit / 12 bytes, cache / 128 bytes)
+  --max-vertices N    the same for vertex records; same default
+  --upload-buffer-mb B  upload bodies being received, in total; beyond, 503 (default 2 x --max-upload-mb)
   --cors-origin O     allow browser requests from origin O ("*" for any); repeatable
   --preload FILE      load FILE at start and print its mesh id; repeatable
   --web-root DIR      serve DIR at / (the browser front-end)
@@ -65,6 +72,11 @@ int main(int argc, char** argv) {
       else if (flag == "--ttl-s") options.ttl_s = int(number(value(), "--ttl-s", 1, 365 * 86400));
       else if (flag == "--max-upload-mb") options.max_upload_mb = std::size_t(number(value(), "--max-upload-mb", 1, 1 << 16));
       else if (flag == "--deadline-s") options.deadline_s = double(number(value(), "--deadline-s", 1, 3600));
+      else if (flag == "--max-connections") options.max_connections = std::size_t(number(value(), "--max-connections", 2, 1000000));
+      else if (flag == "--head-timeout-s") options.head_timeout_s = double(number(value(), "--head-timeout-s", 1, 3600));
+      else if (flag == "--max-triangles") options.max_triangles = std::size_t(number(value(), "--max-triangles", 1, 4000000000L));
+      else if (flag == "--max-vertices") options.max_vertices = std::size_t(number(value(), "--max-vertices", 1, 4000000000L));
+      else if (flag == "--upload-buffer-mb") options.upload_buffer_mb = std::size_t(number(value(), "--upload-buffer-mb", 1, 1 << 20));
       else if (flag == "--cors-origin") options.cors_origins.push_back(value());
       else if (flag == "--preload") options.preload.push_back(value());
       else if (flag == "--web-root") options.web_root = value();

@@ -22,11 +22,14 @@
 #include <ctime>
 #include <future>
 #include <iostream>
+#include <malloc.h>
 #include <mutex>
 
+#include "server/compression.h"
 #include "server/http_errors.h"
 #include "server/metrics.h"
 #include "server/session_cache.h"
+#include "server/transport.h"
 #include "server/work_pool.h"
 
 namespace featureline::server {
@@ -78,31 +81,43 @@ void write_error(httplib::Response& res, const ErrorReply& error) {
   res.set_content(error.body(), "application/json");
 }
 
-// httplib 0.11 ignores a handler's "Connection: close": it keeps the connection open and parses
-// the unread rest of a refused upload as the next request (request smuggling, reproduced by
-// tests/integration/server_test.sh). A content provider that reports failure after writing the
-// whole body makes httplib close the connection once the response is out.
-void close_after_response(httplib::Response& res) {
-  auto body = std::make_shared<std::string>(std::move(res.body));
-  const std::string type = res.get_header_value("Content-Type");
-  res.body.clear();
-  res.headers.erase("Content-Type");
-  res.set_content_provider(body->size(), type, [body](std::size_t, std::size_t, httplib::DataSink& sink) {
-    sink.write(body->data(), body->size());
-    return false;  // ends the connection
-  });
-}
-
 void write_json(httplib::Response& res, int status, const json& body) {
   res.status = status;
   res.set_content(body.dump(), "application/json");
+}
+
+bool is_upload(std::string_view method, std::string_view path) { return method == "POST" && path == "/v1/meshes"; }
+
+// The transport's limits from the server's options: bodies are refused before they are read when
+// larger than the upload limit (uploads) or the JSON limit (every other route).
+TransportLimits transport_limits(const ServerOptions& o, std::function<void(const ErrorReply&)> on_refusal) {
+  TransportLimits limits;
+  limits.on_refusal = std::move(on_refusal);
+  limits.workers = std::max<std::size_t>(2, o.http_threads);
+  limits.max_connections = o.max_connections != 0 ? std::max(o.max_connections, limits.workers) : 2 * limits.workers;
+  limits.head_timeout_s = o.head_timeout_s;
+  limits.io_timeout_s = o.read_timeout_s;
+  const std::size_t max_upload = o.max_upload_mb << 20;
+  limits.max_body_bytes = [max_upload](std::string_view method, std::string_view path) {
+    return is_upload(method, path) ? max_upload : std::size_t(kMaxJsonBytes);
+  };
+  return limits;
+}
+
+// How far an upload may expand (glTF instancing): tied to the upload limit and the cache budget.
+ReadMeshOptions upload_read_limits(const ServerOptions& o) {
+  ReadMeshOptions limits = read_limits_for(o.max_upload_mb << 20, o.cache_mb << 20);
+  if (o.max_triangles != 0) limits.max_triangles = o.max_triangles;
+  if (o.max_vertices != 0) limits.max_vertices = o.max_vertices;
+  return limits;
 }
 
 }  // namespace
 
 struct FeaturelineServer::Impl {
   ServerOptions options;
-  httplib::Server http;
+  GuardedServer http;
+  const ReadMeshOptions read_limits;
   SessionCache cache;
   WorkPool pool;
   Metrics metrics;
@@ -116,13 +131,18 @@ struct FeaturelineServer::Impl {
 
   explicit Impl(ServerOptions o)
       : options(std::move(o)),
+        http(transport_limits(options, [this](const ErrorReply& refusal) { record_transport_refusal(refusal); })),
+        read_limits(upload_read_limits(options)),
         cache(SessionCache::Options{options.cache_mb << 20, std::chrono::seconds(options.ttl_s), [] { return Clock::now(); }}),
         pool(options.engine_threads, options.queue_capacity) {
     configure_transport();
     register_routes();
     sweeper = std::thread([this] {
       std::unique_lock<std::mutex> lock(sweeper_mutex);
-      while (!sweeper_wake.wait_for(lock, std::chrono::seconds(5), [this] { return sweeper_stop; })) cache.expire_idle();
+      while (!sweeper_wake.wait_for(lock, std::chrono::seconds(5), [this] { return sweeper_stop; })) {
+        cache.expire_idle();
+        return_freed_memory();
+      }
     });
   }
 
@@ -136,20 +156,31 @@ struct FeaturelineServer::Impl {
     pool.stop();
   }
 
+  // glibc keeps freed heap pages (and per-thread arenas) mapped: after sessions are deleted,
+  // expired or evicted, RSS stayed at the peak (234 MB after deleting everything, issue 10).
+  // malloc_trim hands them back; it runs on the sweeper, only after the cache shrank.
+  std::size_t bytes_at_last_trim = 0;
+  void return_freed_memory() {
+    const std::size_t bytes = cache.stats().bytes;
+    if (bytes < bytes_at_last_trim) malloc_trim(0);
+    bytes_at_last_trim = bytes;
+  }
+
   // ---- transport ----------------------------------------------------------------------
   void configure_transport() {
-    const std::size_t http_threads = std::max<std::size_t>(2, options.http_threads);
-    // Sized explicitly: the library's default is max(8, cores - 1) with an unbounded queue.
-    http.new_task_queue = [http_threads] { return new httplib::ThreadPool(http_threads); };
-    http.set_read_timeout(options.read_timeout_s, 0);
-    http.set_write_timeout(options.read_timeout_s, 0);
-    http.set_keep_alive_timeout(5);
+    // Connection workers, their bounded queue, keep-alive, timeouts, header and body limits are
+    // GuardedServer's (server/transport.h); httplib's own settings for them are not used.
     // Headers and body go out in separate writes: without TCP_NODELAY, Nagle's algorithm
     // holds the body until the client's delayed ACK (about 40 ms per response, measured).
     http.set_tcp_nodelay(true);
-    http.set_keep_alive_max_count(1000);
-    // A safety net only: uploads check Content-Length themselves before reading.
+    // Only for the Keep-Alive header httplib writes: the transport applies these itself.
+    http.set_keep_alive_max_count(http.limits().keep_alive_max_requests);
+    http.set_keep_alive_timeout(std::time_t(http.limits().idle_timeout_s));
+    // A safety net only: the transport refuses larger bodies before they are read.
     http.set_payload_max_length((options.max_upload_mb << 20) + 1);
+    http.set_expect_100_continue_handler([this](const httplib::Request& req, httplib::Response& res) {
+      return expect_continue(req, res);
+    });
 
     http.set_pre_routing_handler([](const httplib::Request&, httplib::Response&) {
       request_start = Clock::now();
@@ -159,14 +190,18 @@ struct FeaturelineServer::Impl {
     });
     // Errors the library produces itself (unknown route, oversized body) get our JSON shape.
     http.set_error_handler([](const httplib::Request&, httplib::Response& res) {
-      // (A body from a content provider, as close_after_response sets, is already ours.)
       if (res.body.empty() && !res.has_header("Content-Type")) write_error(res, error_reply_for_status(res.status));
     });
     // Never let exception text reach a response header (EXCEPTION_WHAT).
     http.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr error) {
       write_error(res, error_reply(error));
     });
-    http.set_post_routing_handler([this](const httplib::Request& req, httplib::Response& res) { add_cors(req, res); });
+    http.set_post_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+      add_cors(req, res);
+      // The connection closes after this answer: say so, or a keep-alive client's next request fails.
+      if (http.stopping() && res.get_header_value("Connection") != "close") res.set_header("Connection", "close");
+      if (res.get_header_value("Connection") == "close") res.headers.erase("Keep-Alive");
+    });
     http.set_logger([this](const httplib::Request& req, const httplib::Response& res) {
       const bool routed = request_routed;
       request_routed = false;
@@ -182,6 +217,15 @@ struct FeaturelineServer::Impl {
       std::fprintf(stderr, "%s %s %s %s %d %zu %.2fms\n", stamp, req.remote_addr.c_str(), req.method.c_str(),
                    req.path.c_str(), res.status, res.body.size(), seconds * 1000);
     });
+  }
+
+  // Requests the transport refused before httplib saw them: counted and logged like the others.
+  void record_transport_refusal(const ErrorReply& refusal) {
+    metrics.record_rejected(refusal.code);
+    metrics.record_request("unmatched", "other", refusal.status, 0.0);
+    if (!options.access_log) return;
+    std::lock_guard<std::mutex> lock(log_mutex);
+    std::fprintf(stderr, "refused by the transport: %d %s\n", refusal.status, refusal.code.c_str());
   }
 
   bool origin_allowed(const std::string& origin) const {
@@ -256,11 +300,13 @@ struct FeaturelineServer::Impl {
     const std::string mesh = "/v1/meshes/([^/]+)";
     http.Post("/v1/meshes", [this](const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
       request_route = "/v1/meshes";
+      bool body_read = false;
       try {
-        upload(req, res, reader);
+        upload(req, res, reader, body_read);
       } catch (...) {
         write_error(res, error_reply(std::current_exception()));
-        if (res.get_header_value("Connection") == "close") close_after_response(res);
+        // The transport closes the connection when a body is left unread; the answer says so.
+        if (!body_read) res.set_header("Connection", "close");
       }
     });
     http.Get(mesh, guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
@@ -274,7 +320,8 @@ struct FeaturelineServer::Impl {
       auto session = session_or_404(req.matches[1]);
       std::string glb = run_on_pool([session] { return feature_line_to_glb(*session->mesh, {}, true); });
       res.set_header("Cache-Control", "private, max-age=3600");
-      res.set_content(std::move(glb), "model/gltf-binary");
+      // The page's largest download: gzip when accepted (httplib compresses no model/* type).
+      set_content_gzip_if_accepted(req, res, std::move(glb), "model/gltf-binary");
     }));
     http.Get(mesh + "/curvature", guarded("/v1/meshes/{id}/curvature", [this](const auto& req, auto& res) {
       curvature(req, res);
@@ -323,34 +370,33 @@ struct FeaturelineServer::Impl {
   }
 
   // ---- handlers ----------------------------------------------------------------------------
-  void upload(const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
-    // Refuse before reading the body; the connection is then closed, so unread body bytes
-    // can never be parsed as a next request.
+  // What an upload's head says, checked before its body is read.
+  struct UploadHead {
+    std::size_t length = 0;
+    std::optional<MeshFormat> format;  ///< from ?format= or Content-Type; else sniffed from the body
+  };
+
+  // Refuses an upload from its head alone (throws HttpError). Transfer-Encoding, Content-Encoding,
+  // a repeated or oversized Content-Length never get here: the transport refuses them.
+  UploadHead check_upload_head(const httplib::Request& req) {
     auto refuse = [&](int status, const char* code, const std::string& message) {
-      res.set_header("Connection", "close");
       metrics.record_rejected(code);
       throw HttpError(status, code, message);
     };
-    const std::size_t max_bytes = options.max_upload_mb << 20;
-    if (req.has_header("Transfer-Encoding"))
-      refuse(411, "length_required", "chunked uploads are not accepted: send the mesh with a Content-Length");
-    const std::string encoding = lower(req.get_header_value("Content-Encoding"));
-    if (!encoding.empty() && encoding != "identity")
-      refuse(415, "unsupported_format", "compressed uploads (Content-Encoding: " + encoding + ") are not accepted");
+    UploadHead head;
     if (!req.has_header("Content-Length")) refuse(411, "length_required", "the upload needs a Content-Length header");
     const std::string length_text = req.get_header_value("Content-Length");
     if (length_text.empty() || length_text.size() > 15 || length_text.find_first_not_of("0123456789") != std::string::npos)
       refuse(400, "invalid_request", "Content-Length is not a number");
-    const std::size_t length = std::stoull(length_text);
-    if (length == 0) refuse(400, "malformed_mesh", "the upload is empty");
-    if (length > max_bytes)
-      refuse(413, "payload_too_large", "the upload is " + std::to_string(length) + " bytes; this server accepts at most " +
+    head.length = std::stoull(length_text);
+    if (head.length == 0) refuse(400, "malformed_mesh", "the upload is empty");
+    if (head.length > (options.max_upload_mb << 20))
+      refuse(413, "payload_too_large", "the upload is " + std::to_string(head.length) + " bytes; this server accepts at most " +
                                            std::to_string(options.max_upload_mb) + " MiB");
-    std::optional<MeshFormat> format;
     if (req.has_param("format")) {
-      format = parse_mesh_format(req.get_param_value("format"));
-      if (!format) refuse(415, "unsupported_format", "unknown format \"" + req.get_param_value("format") +
-                                                         "\"; use obj, off, ply, stl, glb, gltf or drc");
+      head.format = parse_mesh_format(req.get_param_value("format"));
+      if (!head.format) refuse(415, "unsupported_format", "unknown format \"" + quote_client_text(req.get_param_value("format")) +
+                                                              "\"; use obj, off, ply, stl, glb, gltf or drc");
     } else if (req.has_header("Content-Type")) {
       const std::string type = media_type(req.get_header_value("Content-Type"));
       static const std::map<std::string, MeshFormat> by_type = {
@@ -358,14 +404,61 @@ struct FeaturelineServer::Impl {
           {"model/x-off", MeshFormat::off},      {"application/x-ply", MeshFormat::ply},
           {"model/gltf-binary", MeshFormat::glb}, {"model/gltf+json", MeshFormat::gltf},
           {"application/x-draco", MeshFormat::drc}};
-      if (auto it = by_type.find(type); it != by_type.end()) format = it->second;
+      if (auto it = by_type.find(type); it != by_type.end()) head.format = it->second;
       else if (type == "application/x-www-form-urlencoded")
         refuse(415, "unsupported_format",
                "the body was sent as a form (curl -d does that); send it as application/octet-stream or a model/* type, "
                "e.g. curl --data-binary @mesh.obj -H 'Content-Type: application/octet-stream'");
       else if (type != "application/octet-stream" && !type.empty())
-        refuse(415, "unsupported_format", "unsupported Content-Type \"" + type + "\"");
+        refuse(415, "unsupported_format", "unsupported Content-Type \"" + quote_client_text(type) + "\"");
     }
+    return head;
+  }
+
+  // Upload bodies being received sit outside the cache budget: their total is bounded here, so
+  // a few slow 200 MB uploads cannot take the memory (issue 10: 4 of them reached 880 MB RSS).
+  std::atomic<std::size_t> upload_bytes_in_flight{0};
+  struct UploadReservation {
+    Impl& server;
+    std::size_t bytes;
+    UploadReservation(Impl& s, std::size_t n) : server(s), bytes(n) {
+      const std::size_t budget = s.options.upload_buffer_mb != 0 ? s.options.upload_buffer_mb << 20 : 2 * (s.options.max_upload_mb << 20);
+      std::size_t used = s.upload_bytes_in_flight.load();
+      do {
+        if (used + n > budget) {
+          s.metrics.record_rejected("upload_buffer_full");
+          throw HttpError(503, "overloaded", "uploads being received already hold " + std::to_string(used >> 20) + " MiB of the " +
+                                                 std::to_string(budget >> 20) + " MiB the server buffers; retry shortly",
+                          {{"Retry-After", "5"}});
+        }
+      } while (!s.upload_bytes_in_flight.compare_exchange_weak(used, used + n));
+    }
+    ~UploadReservation() { server.upload_bytes_in_flight -= bytes; }
+    UploadReservation(const UploadReservation&) = delete;
+    UploadReservation& operator=(const UploadReservation&) = delete;
+  };
+
+  // Expect: 100-continue: an upload that will be refused gets its refusal instead of 100 Continue
+  // (the client then never sends the body, and the transport closes the connection).
+  int expect_continue(const httplib::Request& req, httplib::Response& res) {
+    if (req.method != "POST" || req.path != "/v1/meshes") return 100;
+    try {
+      check_upload_head(req);
+      return 100;
+    } catch (...) {
+      write_error(res, error_reply(std::current_exception()));
+      res.set_header("Connection", "close");  // the transport closes: the body was never read
+      return res.status;
+    }
+  }
+
+  void upload(const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader, bool& body_read) {
+    // The head is checked before the body is read. Whatever is refused, a body left unread ends
+    // the connection (server/transport.cpp), so its bytes are never parsed as a next request.
+    const UploadHead head = check_upload_head(req);
+    const std::size_t length = head.length;
+    std::optional<MeshFormat> format = head.format;
+    const UploadReservation reservation(*this, length);
 
     std::string body;
     body.reserve(length);
@@ -374,8 +467,8 @@ struct FeaturelineServer::Impl {
       body.append(data, size);
       return true;
     });
-    if (!complete || body.size() != length) {
-      res.set_header("Connection", "close");
+    body_read = complete && body.size() == length;
+    if (!body_read) {
       throw HttpError(400, "malformed_mesh", "the upload ended after " + std::to_string(body.size()) + " of " +
                                                  std::to_string(length) + " bytes");
     }
@@ -385,9 +478,9 @@ struct FeaturelineServer::Impl {
                       "could not tell the mesh format from its bytes; pass ?format=obj|off|ply|stl|glb|gltf|drc");
 
     const MeshFormat fmt = *format;
-    MeshSession session = run_on_pool([body = std::move(body), fmt]() {
+    MeshSession session = run_on_pool([body = std::move(body), fmt, limits = read_limits]() {
       const auto t0 = Clock::now();
-      RawMesh raw = read_mesh(body, fmt);
+      RawMesh raw = read_mesh(body, fmt, limits);
       MeshSession s;
       s.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
       s.format = fmt;
@@ -470,18 +563,30 @@ struct FeaturelineServer::Impl {
   }
 
   // Lines run in parallel on the pool; each job shares the immutable mesh.
+  // The batch shares one Cancellation with the request's deadline: work stops when the deadline
+  // passes, and when the batch is refused or a line fails, its other lines stop too instead of
+  // holding workers for an answer nobody will read.
   std::vector<FeatureLineResult> run_lines(const std::shared_ptr<const MeshSession>& session,
                                            const std::vector<FeatureLineRequest>& lines) {
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.deadline_s));
+    const auto cancel = std::make_shared<Cancellation>(deadline);
+    struct CancelUnlessDone {
+      std::shared_ptr<Cancellation> cancel;
+      bool done = false;
+      ~CancelUnlessDone() {
+        if (!done) cancel->cancel();
+      }
+    } guard{cancel};
     std::vector<std::future<FeatureLineResult>> futures;
-    for (const auto& line : lines) {
-      auto future = pool.try_submit([session, line] { return detect_feature_line(*session->mesh, line); });
+    for (auto line : lines) {
+      line.cancel = cancel.get();
+      auto future = pool.try_submit([session, line, cancel] { return detect_feature_line(*session->mesh, line); });
       if (!future) {
         metrics.record_rejected("queue_full");
         throw HttpError(503, "overloaded", "the server is busy; retry shortly", {{"Retry-After", "1"}});
       }
       futures.push_back(std::move(*future));
     }
-    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.deadline_s));
     std::vector<FeatureLineResult> results;
     for (auto& f : futures) {
       if (f.wait_until(deadline) != std::future_status::ready) {
@@ -490,6 +595,7 @@ struct FeaturelineServer::Impl {
       }
       results.push_back(f.get());
     }
+    guard.done = true;
     return results;
   }
 
@@ -588,12 +694,13 @@ int FeaturelineServer::bind() {
   if (port == 0) port = impl_->http.bind_to_any_port(o.host);
   else if (!impl_->http.bind_to_port(o.host, port)) port = -1;
   if (port <= 0) throw std::runtime_error("cannot listen on " + o.host + ":" + std::to_string(o.port));
+  impl_->http.widen_backlog();
   return port;
 }
 
 bool FeaturelineServer::run() { return impl_->http.listen_after_bind(); }
 
-void FeaturelineServer::stop() { impl_->http.stop(); }
+void FeaturelineServer::stop() { impl_->http.stop_gracefully(); }
 
 std::string FeaturelineServer::preload(const std::string& path) {
   const auto t0 = Clock::now();

@@ -22,7 +22,12 @@ struct ServerOptions {
   int ttl_s = 1800;                  ///< idle time after which a session expires
   std::size_t max_upload_mb = 256;   ///< largest accepted upload body
   double deadline_s = 30;            ///< a request waiting longer for the engine is answered 503
-  int read_timeout_s = 5;            ///< per read; slow clients are cut off
+  int read_timeout_s = 5;            ///< per read or write; slow clients are cut off
+  double head_timeout_s = 10;        ///< a request's head must arrive within this from its first byte (else 408)
+  std::size_t max_connections = 0;   ///< open connections (served + waiting); beyond: 503 at once (0: 2 x http_threads)
+  std::size_t max_triangles = 0;     ///< an upload may expand to this many triangles (0: from the upload limit and cache)
+  std::size_t max_vertices = 0;      ///< the same for vertex records (0: as max_triangles' default)
+  std::size_t upload_buffer_mb = 0;  ///< upload bodies being received, in total; beyond: 503 (0: 2 x max_upload_mb)
   std::vector<std::string> cors_origins;  ///< allowed browser origins ("*" for any); none by default
   std::vector<std::string> preload;       ///< meshes loaded at start (their ids are printed)
   bool access_log = true;                 ///< one line per request on stderr

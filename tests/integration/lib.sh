@@ -14,6 +14,12 @@
 #   validate_request NAME METHOD PATH FILE / validate_gltf NAME FILE
 #                              queue a validator run; run_validations runs the queue in
 #                              parallel (one node process per distinct body) and reports each
+#   raw_send PORT OUT PAUSE HEAD BODY
+#                              sends HEAD (and BODY after PAUSE seconds) on one raw connection,
+#                              reads until the server closes (OUT); sets CLOSE_S (seconds from the
+#                              last write to the close, "timeout" after 10 s * FACTOR)
+#   responses FILE / first_body FILE
+#                              status lines in a raw exchange / the body of its first response
 #   finish                     prints the summary; the exit status is 1 when anything failed
 #
 # Needs: bash 4, curl, jq, node (with node_modules from scripts/setup.sh).
@@ -150,6 +156,29 @@ expect() {
     validate_json "$name: body matches the contract" "$method" "$path" "$STATUS" "$out"
   fi
 }
+
+# ---- raw connections ------------------------------------------------------------------------
+
+raw_send() {
+  local port=$1 out=$2 pause=$3 head=$4 body=$5
+  (
+    trap '' PIPE
+    exec 3<>"/dev/tcp/127.0.0.1/$port" || exit 1
+    if [ "$pause" = 0 ]; then printf '%s%s' "$head" "$body" >&3 2>/dev/null
+    else printf '%s' "$head" >&3 2>/dev/null; sleep "$pause"; printf '%s' "$body" >&3 2>/dev/null; fi
+    t0=$(now_s)
+    timeout $((10 * FACTOR)) cat <&3 >"$out"
+    rc=$?
+    if [ $rc = 124 ]; then echo timeout; else elapsed_since "$t0"; fi
+  ) >"$out.close" 2>/dev/null
+  CLOSE_S=$(cat "$out.close")
+  CLOSE_S=${CLOSE_S:-no-connection}
+}
+first_body() {  # the body of the first response in a raw exchange (by its Content-Length)
+  perl -e 'local $/; my $s = <STDIN>; my ($h, $b) = split /\r\n\r\n/, $s, 2;
+           my ($n) = $h =~ /^Content-Length:\s*(\d+)/mi; print substr($b // "", 0, $n // 0)' <"$1"
+}
+responses() { LC_ALL=C grep -aoE 'HTTP/1\.[01] [0-9]{3} ' "$1" | wc -l; }  # status lines, wherever they start
 
 # ---- validator queue ------------------------------------------------------------------------
 

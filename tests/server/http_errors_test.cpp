@@ -25,6 +25,12 @@ TEST(HttpErrors, EngineErrorsMapToTheirStatuses) {
   EXPECT_EQ(reply_for(LimitExceededError("x")).status, 413);
   EXPECT_EQ(reply_for(GeometryError("keys on different components")).status, 422);
   EXPECT_EQ(reply_for(GeometryError("keys on different components")).code, "unprocessable_geometry");
+  // Engine work stopped by the request's deadline (engine/cancellation.h): retry later.
+  const auto cancelled = reply_for(CancelledError("the request was cancelled"));
+  EXPECT_EQ(cancelled.status, 503);
+  EXPECT_EQ(cancelled.code, "deadline_exceeded");
+  ASSERT_EQ(cancelled.headers.size(), 1u);
+  EXPECT_EQ(cancelled.headers[0].first, "Retry-After");
   EXPECT_EQ(reply_for(HttpError(503, "overloaded", "busy", {{"Retry-After", "1"}})).headers.size(), 1u);
 }
 
@@ -47,6 +53,21 @@ TEST(HttpErrors, BodyIsTheJsonErrorShape) {
     EXPECT_EQ(error_reply(std::current_exception()).code, "invalid_json");
   }
   EXPECT_TRUE(threw);
+}
+
+TEST(HttpErrors, ClientBytesAreEscapedInMessages) {
+  EXPECT_EQ(quote_client_text("obj"), "obj");
+  EXPECT_EQ(quote_client_text("\xff\"\n\\"), "\\xFF\"\\x0A\\x5C");
+  EXPECT_EQ(quote_client_text(std::string(100, 'a')), std::string(64, 'a') + "...");
+}
+
+TEST(HttpErrors, InvalidUtf8NeverBreaksTheErrorBody) {
+  // ?format=%FF once put the byte 0xFF into a message: serialising threw and the refusal's
+  // connection close was skipped (issue 10).
+  const ErrorReply r{415, "unsupported_format", "unknown format \"\xff\"", {}};
+  std::string body;
+  ASSERT_NO_THROW(body = r.body());
+  EXPECT_EQ(nlohmann::json::parse(body)["error"]["message"], "unknown format \"\xEF\xBF\xBD\"");
 }
 
 }  // namespace

@@ -11,128 +11,18 @@
 //   CHROMIUM   the browser (default /usr/bin/chromium); a missing browser FAILS the test
 //   WEB_ROOT   a built page to serve (default: the page is built into a temporary folder)
 // Prints "ok"/"FAIL" per check and closes with "N passed, N failed"; exits 1 on any failure.
-import { spawn } from 'node:child_process';
+// The server, browser and check helpers are shared with tests/web/workbench_e2e.mjs
+// (tests/web/harness.mjs).
 import fs from 'node:fs';
-import os from 'node:os';
 import path from 'node:path';
-import { fileURLToPath } from 'node:url';
+import { createHarness, repo, sleep, until, Fatal } from './harness.mjs';
 
-const repo = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
-const fromRepo = (p) => (path.isAbsolute(p) ? p : path.join(repo, p));
-const SERVER = fromRepo(process.env.SERVER || 'build/server/featureline-server');
-const ARTIFACT = fromRepo(process.env.ARTIFACTS || 'build/test-artifacts/web.png');
-const CHROMIUM = process.env.CHROMIUM || '/usr/bin/chromium';
+const h = createHarness({ totalTimeoutMs: 180_000, artifactName: 'web.png' });
+const { check, ok } = h;
+const ARTIFACT = h.ARTIFACT;
 const SAMPLE = path.join(repo, 'samples', 'ridge_field.off');
-const TOTAL_TIMEOUT_MS = 180_000;
-
-let passed = 0;
-let failed = 0;
-function ok(name) {
-  passed++;
-  console.log(`ok ${passed + failed} - ${name}`);
-}
-function fail(name, detail) {
-  failed++;
-  console.log(`FAIL ${passed + failed} - ${name}${detail ? `: ${detail}` : ''}`);
-}
-function check(cond, name, detail) {
-  if (cond) ok(name);
-  else fail(name, typeof detail === 'function' ? detail() : detail);
-  return !!cond;
-}
-function finish(code) {
-  console.log(`${passed} passed, ${failed} failed`);
-  process.exit(code ?? (failed ? 1 : 0));
-}
-// A problem that makes going on pointless: counted as a failure, then clean up and stop.
-class Fatal extends Error {}
-
-const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-async function until(what, fn, timeoutMs = 15000, everyMs = 50) {
-  const end = Date.now() + timeoutMs;
-  let last;
-  for (;;) {
-    try {
-      last = await fn();
-      if (last) return last;
-    } catch (e) {
-      last = e;
-    }
-    if (Date.now() > end) throw new Fatal(`timed out after ${timeoutMs} ms waiting for ${what}${last instanceof Error ? ` (${last.message})` : ''}`);
-    await sleep(everyMs);
-  }
-}
-
-// ---- preconditions: these fail the test, never skip it ----------------------------------
-if (!fs.existsSync(CHROMIUM)) {
-  fail('chromium is installed', `${CHROMIUM} not found (install it: apt-get install -y chromium; or set CHROMIUM)`);
-  finish(1);
-}
-let chromium;
-try {
-  ({ chromium } = await import('playwright-core'));
-} catch (e) {
-  fail('playwright-core is installed', `cannot import playwright-core (run npm ci at the repository root): ${e.message}`);
-  finish(1);
-}
-if (!fs.existsSync(SERVER)) {
-  fail('the server binary exists', `${SERVER} not found (build featureline-server, or set SERVER)`);
-  finish(1);
-}
-
-const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'featureline-web-'));
-let webRoot = process.env.WEB_ROOT ? fromRepo(process.env.WEB_ROOT) : '';
-if (!webRoot) {
-  try {
-    const { build } = await import(path.join(repo, 'web', 'build.mjs'));
-    webRoot = build(path.join(tmp, 'web')).outDir;
-  } catch (e) {
-    fail('the page builds', e.message);
-    finish(1);
-  }
-}
-check(fs.existsSync(path.join(webRoot, 'index.html')), 'the page is built', `${webRoot}/index.html missing`);
-
-let server = null;
-let serverLog = '';
-let context = null;
+await h.prepare();
 let page = null;
-const pageErrors = [];
-const consoleErrors = [];
-const timer = setTimeout(() => {
-  fail('the test finishes in time', `still running after ${TOTAL_TIMEOUT_MS / 1000} s`);
-  cleanup().finally(() => finish(1));
-}, TOTAL_TIMEOUT_MS);
-
-async function cleanup() {
-  clearTimeout(timer);
-  try {
-    if (context) await context.close();
-  } catch {
-    // already gone
-  }
-  if (server && server.exitCode === null) {
-    server.kill('SIGTERM');
-    await Promise.race([new Promise((r) => server.once('exit', r)), sleep(3000)]);
-    if (server.exitCode === null) server.kill('SIGKILL');
-  }
-  fs.rmSync(tmp, { recursive: true, force: true });
-}
-
-async function startServer() {
-  const portFile = path.join(tmp, 'port');
-  server = spawn(SERVER, ['--port', '0', '--port-file', portFile, '--web-root', webRoot, '--preload', SAMPLE, '--threads', '2'], {
-    stdio: ['ignore', 'pipe', 'pipe'],
-  });
-  server.stdout.on('data', (d) => (serverLog += d));
-  server.stderr.on('data', (d) => (serverLog += d));
-  const port = await until('the server to write its port', () => {
-    if (server.exitCode !== null) throw new Fatal(`the server exited with ${server.exitCode}:\n${serverLog}`);
-    const text = fs.existsSync(portFile) ? fs.readFileSync(portFile, 'utf8').trim() : '';
-    return /^\d+$/.test(text) ? Number(text) : 0;
-  });
-  return `http://127.0.0.1:${port}`;
-}
 
 const state = () => page.evaluate(() => {
   const f = window.featureline;
@@ -155,35 +45,10 @@ const activeOf = (s) => s.lines.find((l) => l.id === s.activeLineId);
 const dist = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
 
 async function run() {
-  const base = await startServer();
+  const base = await h.startServer(['--preload', SAMPLE]);
   ok('the server starts with --web-root and --preload');
-
-  const profile = path.join(tmp, 'profile');
-  fs.mkdirSync(profile);
-  context = await chromium.launchPersistentContext(profile, {
-    executablePath: CHROMIUM,
-    headless: true,
-    viewport: { width: 1280, height: 800 },
-    acceptDownloads: true,
-    args: [
-      '--no-sandbox',
-      '--disable-gpu',
-      '--disable-quic',
-      '--no-first-run',
-      '--disable-background-networking',
-      '--disable-component-update',
-      '--disable-sync',
-      // WebGL without a GPU: ANGLE on SwiftShader (software).
-      '--use-angle=swiftshader',
-      '--enable-unsafe-swiftshader',
-    ],
-  });
-  page = context.pages()[0] || (await context.newPage());
-  page.on('pageerror', (e) => pageErrors.push(e.message));
-  page.on('console', (m) => {
-    if (m.type() === 'error') consoleErrors.push(m.text());
-    if (process.env.E2E_VERBOSE) console.log(`  [page ${m.type()}] ${m.text()}`);
-  });
+  page = await h.launch({ width: 1280, height: 800 });
+  const tmp = h.tmp;
 
   let s;
   // ---- the page loads, the sample list comes from the build ----------------------------
@@ -328,13 +193,21 @@ async function run() {
   // ---- a second line ---------------------------------------------------------------------------
   await page.click('#add-line');
   // Near the left and right borders, across the ridge: with the first line it cuts the field in two.
+  // Placed exactly where clicked: snapping off (S), as for a cut meant to run border to border.
+  await page.keyboard.press('s');
+  check(!(await page.evaluate(() => window.featureline.snapping)) && !(await page.isChecked('#snap-toggle')), 'S turns snapping off');
+  const underPointer = [];
   for (const v of [821, 859]) {
     const p = await screenOf(v);
+    underPointer.push((await page.evaluate(([x, y]) => window.featureline.pickVertexAt(x, y), [p.x, p.y])).vertex);
     await page.mouse.click(p.x, p.y);
     await idle();
   }
   s = await state();
   check(s.lines.length === 2 && s.lines.every((l) => l.result && !l.error), 'a second line is detected', () => JSON.stringify(s.lines.map((l) => [l.keys, l.error])));
+  check(JSON.stringify(s.lines[1].keys) === JSON.stringify(underPointer), 'without snapping keys land on the vertices under the pointer',
+    () => `${s.lines[1].keys} vs ${underPointer}`);
+  await page.keyboard.press('s');
   stats = await page.evaluate(() => window.featureline.sceneStats());
   check(stats.refinedLines === 2 && stats.initialLines === 2 && stats.keyMarkers === 5, 'both lines are drawn', JSON.stringify(stats));
   check((await page.locator('#line-list li').count()) === 2, 'the line list shows both lines');
@@ -432,26 +305,9 @@ async function run() {
   check(!(await page.evaluate(() => window.featureline.sceneStats())).segmentSceneShown, 'the segment colours toggle off');
   await page.unroute('**/segmentation*');
 
-  check(pageErrors.length === 0, 'no uncaught errors in the page', pageErrors.join('\n'));
-  const unexpected = consoleErrors.filter((t) => !/Failed to load resource/.test(t));
+  check(h.pageErrors.length === 0, 'no uncaught errors in the page', h.pageErrors.join('\n'));
+  const unexpected = h.consoleErrors.filter((t) => !/Failed to load resource/.test(t));
   check(unexpected.length === 0, 'no errors logged in the console', unexpected.join('\n'));
 }
 
-try {
-  await run();
-} catch (e) {
-  fail('the browser test runs to the end', e instanceof Fatal ? e.message : e.stack || String(e));
-  try {
-    if (page) {
-      fs.mkdirSync(path.dirname(ARTIFACT), { recursive: true });
-      await page.screenshot({ path: path.join(path.dirname(ARTIFACT), 'web-failure.png') });
-      console.log(`failure screenshot: ${path.join(path.dirname(ARTIFACT), 'web-failure.png')}`);
-    }
-  } catch {
-    // no screenshot then
-  }
-  if (pageErrors.length) console.log(`page errors:\n${pageErrors.join('\n')}`);
-  if (serverLog) console.log(`server output (last lines):\n${serverLog.split('\n').slice(-15).join('\n')}`);
-}
-await cleanup();
-finish();
+await h.run(run);

@@ -10,28 +10,73 @@ export const API_BASE = (() => {
 })();
 
 export class ApiError extends Error {
-  constructor(status, code, message) {
+  // retryAfter: seconds the server asked to wait (503 with Retry-After), else null.
+  constructor(status, code, message, retryAfter = null) {
     super(message);
     this.name = 'ApiError';
     this.status = status;
     this.code = code;
+    this.retryAfter = retryAfter;
+  }
+  get isNetwork() {
+    return this.status === 0 && this.code === 'network';
+  }
+  // Worth trying again unchanged: the server was busy or could not be reached.
+  get isTransient() {
+    return this.isNetwork || this.status === 503;
+  }
+  // The mesh id is unknown to the server (expired, evicted, deleted).
+  get isMeshGone() {
+    return this.status === 404 && this.code === 'not_found';
   }
   toString() {
     return this.status ? `${this.message} (HTTP ${this.status}${this.code ? ` ${this.code}` : ''})` : this.message;
   }
 }
 
+function retryAfterSeconds(value) {
+  if (value == null || value === '') return null;
+  const s = Number(value);
+  if (Number.isFinite(s)) return Math.max(0, s);
+  const date = Date.parse(value); // Retry-After may also be an HTTP date
+  return Number.isFinite(date) ? Math.max(0, (date - Date.now()) / 1000) : null;
+}
+
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+// Runs `attempt` again when it fails transiently: after the server's Retry-After (capped at
+// 10 s) for a 503, after 1 s, 2 s, ... when the server could not be reached. onRetry({error,
+// attempt, delayS}) is told before each wait so the page can say what is happening.
+export async function withRetry(attempt, { tries = 4, onRetry } = {}) {
+  for (let n = 1; ; ++n) {
+    try {
+      return await attempt();
+    } catch (e) {
+      if (!(e instanceof ApiError) || !e.isTransient || n >= tries) throw e;
+      const delayS = Math.min(10, e.retryAfter ?? n);
+      onRetry?.({ error: e, attempt: n, delayS });
+      await sleep(delayS * 1000);
+    }
+  }
+}
+
 // An ApiError from a non-2xx answer's text: the server's JSON message when there is one.
-function errorFromText(status, statusText, text) {
+function errorFromText(status, statusText, text, retryAfter = null) {
+  const retry = retryAfterSeconds(retryAfter);
   try {
     const body = JSON.parse(text);
     if (body && body.error && typeof body.error.message === 'string')
-      return new ApiError(status, body.error.code || '', body.error.message);
+      return new ApiError(status, body.error.code || '', body.error.message, retry);
   } catch {
     // not JSON: fall through
   }
   const snippet = (text || '').trim().slice(0, 200);
-  return new ApiError(status, '', snippet || statusText || `HTTP ${status}`);
+  return new ApiError(status, '', snippet || statusText || `HTTP ${status}`, retry);
+}
+
+function networkError(what, detail) {
+  const where = API_BASE || globalThis.location?.origin || 'the server';
+  return new ApiError(0, 'network', `${what}: could not reach ${where} (network error${detail ? `: ${detail}` : ''})`);
 }
 
 async function errorFromResponse(response) {
@@ -41,7 +86,7 @@ async function errorFromResponse(response) {
   } catch {
     // ignore: the status alone is reported
   }
-  return errorFromText(response.status, response.statusText, text);
+  return errorFromText(response.status, response.statusText, text, response.headers.get('Retry-After'));
 }
 
 async function request(path, init) {
@@ -50,7 +95,7 @@ async function request(path, init) {
     response = await fetch(API_BASE + path, init);
   } catch (e) {
     if (e.name === 'AbortError') throw e;
-    throw new ApiError(0, 'network', `the server did not answer (${e.message})`);
+    throw networkError('no answer', e.message);
   }
   if (!response.ok) throw await errorFromResponse(response);
   return response;
@@ -84,10 +129,10 @@ export function uploadMesh(body, { format, onProgress } = {}) {
           reject(new ApiError(xhr.status, '', 'the server answered the upload with something that is not JSON'));
         }
       } else {
-        reject(errorFromText(xhr.status, xhr.statusText, xhr.responseText));
+        reject(errorFromText(xhr.status, xhr.statusText, xhr.responseText, xhr.getResponseHeader('Retry-After')));
       }
     };
-    xhr.onerror = () => reject(new ApiError(0, 'network', 'the upload failed: the server did not answer or closed the connection'));
+    xhr.onerror = () => reject(networkError('the upload failed', 'or the server closed the connection'));
     xhr.onabort = () => reject(new ApiError(0, 'aborted', 'the upload was cancelled'));
     xhr.send(body);
   });
@@ -97,11 +142,36 @@ export async function describeMesh(meshId) {
   return (await request(`/v1/meshes/${meshId}`)).json();
 }
 
-export async function meshGlb(meshId) {
-  return (await request(`/v1/meshes/${meshId}/mesh.glb`, { headers: { Accept: 'model/gltf-binary' } })).arrayBuffer();
+// The server's indexed mesh. onProgress({received, total}) counts the bytes as the page gets
+// them (decompressed when the server sends gzip, so `total` is the caller's estimate, or the
+// Content-Length when the answer is not compressed). Resolves to {bytes, wireBytes, encoding}.
+export async function meshGlb(meshId, { onProgress, expectedBytes = 0 } = {}) {
+  const response = await request(`/v1/meshes/${meshId}/mesh.glb`, { headers: { Accept: 'model/gltf-binary' } });
+  const encoding = response.headers.get('Content-Encoding') || 'identity';
+  const length = Number(response.headers.get('Content-Length')) || 0;
+  const total = encoding === 'identity' && length ? length : expectedBytes;
+  if (!response.body?.getReader) {
+    const bytes = await response.arrayBuffer();
+    return { bytes, wireBytes: length || bytes.byteLength, encoding };
+  }
+  const reader = response.body.getReader();
+  const chunks = [];
+  let received = 0;
+  for (;;) {
+    const { done, value } = await reader.read();
+    if (done) break;
+    chunks.push(value);
+    received += value.byteLength;
+    onProgress?.({ received, total });
+  }
+  const bytes = new Uint8Array(received);
+  let at = 0;
+  for (const c of chunks) bytes.set(c, at), (at += c.byteLength);
+  return { bytes: bytes.buffer, wireBytes: length || received, encoding };
 }
 
-// Signed mean curvature per vertex, little-endian float32.
+// The server's signed per-vertex curvature field (api/openapi.yaml says which), little-endian
+// float32. Its scale is the server's business: the page only compares and ranks values.
 export async function curvature(meshId) {
   const bytes = await (await request(`/v1/meshes/${meshId}/curvature`, { headers: { Accept: 'application/octet-stream' } })).arrayBuffer();
   const n = bytes.byteLength >>> 2;

@@ -16,8 +16,14 @@ export const COLORS = {
   firstKey: 0x5cff8a,
   otherKey: 0xc58cff,
   hoverKey: 0xffffff,
+  selectedKey: 0xff4df0,
+  snapPreview: 0x5cff8a,
+  edges: 0x1d2330,
 };
 const KEY_PIXELS = 7; // key marker radius on screen
+// A press within this many pixels of a key's centre is on its marker (grab or select it);
+// anywhere else places a new key, so keys can sit close together.
+export const KEY_HIT_PIXELS = KEY_PIXELS + 2;
 
 export function parseGlb(arrayBuffer) {
   return new Promise((resolve, reject) => {
@@ -72,13 +78,17 @@ export class Viewer {
     this.segmentGroup = new THREE.Group();
     this.lineGroup = new THREE.Group();
     this.keyGroup = new THREE.Group();
-    this.scene.add(this.meshGroup, this.segmentGroup, this.lineGroup, this.keyGroup);
+    this.edgeGroup = new THREE.Group();
+    this.hoverGroup = new THREE.Group();
+    this.scene.add(this.meshGroup, this.edgeGroup, this.segmentGroup, this.lineGroup, this.keyGroup, this.hoverGroup);
+    this.upAxis = 'y';
 
     this.raycaster = new THREE.Raycaster();
     this.mesh = null; // the indexed data {positions, normals, index, ...}
     this.displayMesh = null; // un-indexed copy (per-corner colours), same triangle order
     this.keyMarkerGeometry = new THREE.SphereGeometry(1, 16, 12);
     this.hoverKey = null;
+    this.selectedKey = null; // {lineId, keyIndex}
     this.renderPending = false;
     this.frames = 0;
 
@@ -111,12 +121,19 @@ export class Viewer {
   }
 
   // ---- the mesh -----------------------------------------------------------------------
-  setMesh(mesh) {
+  // mesh: {positions, normals, index, ...}; upAxis 'y' | 'z'; flat: flat shading (CAD);
+  // sharpEdges: vertex pairs to outline (shown when flat or asked for).
+  setMesh(mesh, { upAxis = 'y', flat = false, sharpEdges = null, showEdges = flat } = {}) {
     this.clearGroup(this.meshGroup);
     this.clearGroup(this.segmentGroup);
     this.clearGroup(this.lineGroup);
     this.clearGroup(this.keyGroup);
+    this.clearGroup(this.edgeGroup);
+    this.clearGroup(this.hoverGroup);
+    this.hoverKey = null;
+    this.selectedKey = null;
     this.mesh = mesh;
+    this.upAxis = upAxis;
     const { positions, normals, index, faceCount } = mesh;
     const pos = new Float32Array(faceCount * 9);
     const nor = new Float32Array(faceCount * 9);
@@ -135,6 +152,7 @@ export class Viewer {
     geometry.computeBoundingSphere();
     const material = new THREE.MeshStandardMaterial({
       vertexColors: true,
+      flatShading: flat,
       roughness: 0.8,
       metalness: 0,
       side: THREE.DoubleSide,
@@ -146,8 +164,57 @@ export class Viewer {
     this.displayMesh = new THREE.Mesh(geometry, material);
     this.displayMesh.name = 'mesh';
     this.meshGroup.add(this.displayMesh);
+    this.setEdges(sharpEdges);
+    this.showEdges(showEdges);
     this.setPlainColors();
     this.fitView();
+  }
+
+  setFlatShading(flat) {
+    if (!this.displayMesh) return;
+    this.displayMesh.material.flatShading = flat;
+    this.displayMesh.material.needsUpdate = true;
+    this.requestRender();
+  }
+
+  get flatShading() {
+    return !!this.displayMesh?.material.flatShading;
+  }
+
+  // Sharp-edge outlines: thin dark segments on the surface (the mesh is offset back in depth).
+  setEdges(pairs) {
+    this.clearGroup(this.edgeGroup);
+    if (!pairs || !pairs.length || !this.mesh) return;
+    const p = this.mesh.positions;
+    const flat = new Float32Array(pairs.length * 3);
+    for (let i = 0; i < pairs.length; ++i) flat.set(p.subarray(3 * pairs[i], 3 * pairs[i] + 3), 3 * i);
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(flat, 3));
+    const edges = new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ color: COLORS.edges }));
+    edges.name = 'sharp-edges';
+    this.edgeGroup.add(edges);
+    this.requestRender();
+  }
+
+  showEdges(on) {
+    this.edgeGroup.visible = on;
+    this.requestRender();
+  }
+
+  get edgesShown() {
+    return this.edgeGroup.visible && this.edgeGroup.children.length > 0;
+  }
+
+  setUpAxis(axis) {
+    this.upAxis = axis;
+    this.fitView();
+  }
+
+  // Orbit around a point on the surface (double-click), keeping the camera where it is.
+  setOrbitCenter(point) {
+    this.controls.target.set(point[0], point[1], point[2]);
+    this.controls.update();
+    this.requestRender();
   }
 
   fitView() {
@@ -157,10 +224,12 @@ export class Viewer {
     const center = box.getCenter(new THREE.Vector3());
     const radius = Math.max(1e-9, this.displayMesh.geometry.boundingSphere.radius);
     this.radius = radius;
-    // Z up when the mesh is thinnest along z (a height field, a CAD part lying flat), else Y up.
-    const zUp = size.z <= size.y && size.z <= size.x;
+    void size;
+    // Seen from the front (+z for Y-up, -y for Z-up), a little from the right and from above
+    // (more from above for Z-up meshes, which are mostly height fields and parts lying flat).
+    const zUp = this.upAxis === 'z';
     this.camera.up.set(0, zUp ? 0 : 1, zUp ? 1 : 0);
-    const dir = zUp ? new THREE.Vector3(0.25, -1.0, 0.95) : new THREE.Vector3(0.45, 0.55, 1.0);
+    const dir = zUp ? new THREE.Vector3(0.25, -1.0, 0.95) : new THREE.Vector3(0.3, 0.45, 1.0);
     dir.normalize();
     const distance = radius / Math.sin(THREE.MathUtils.degToRad(this.camera.fov / 2)) * 0.95;
     this.camera.position.copy(center).addScaledVector(dir, distance);
@@ -292,6 +361,15 @@ export class Viewer {
     return { vertex: best, face: f, point: hit.point.toArray() };
   }
 
+  // The vertex with the smallest or largest coordinate along an axis (0, 1, 2).
+  extremeVertex(axis, largest) {
+    const p = this.mesh.positions;
+    let best = 0;
+    for (let v = 1; v < this.mesh.vertexCount; ++v)
+      if (largest ? p[3 * v + axis] > p[3 * best + axis] : p[3 * v + axis] < p[3 * best + axis]) best = v;
+    return best;
+  }
+
   vertexPosition(v) {
     const p = this.mesh.positions;
     return new THREE.Vector3(p[3 * v], p[3 * v + 1], p[3 * v + 2]);
@@ -306,7 +384,7 @@ export class Viewer {
 
   // The key marker nearest to the pointer within a few pixels: {lineId, keyIndex}; keys of
   // the active line win over others.
-  pickKey(clientX, clientY, radiusPx = KEY_PIXELS + 5) {
+  pickKey(clientX, clientY, radiusPx = KEY_HIT_PIXELS) {
     let best = null;
     let bestScore = Infinity;
     for (const marker of this.keyGroup.children) {
@@ -323,6 +401,23 @@ export class Viewer {
     return best;
   }
 
+  // Where a click would place a key (after snapping): a small ring-less dot, or nothing.
+  setSnapPreview(vertex) {
+    this.clearGroup(this.hoverGroup);
+    if (vertex != null && this.mesh) {
+      const marker = new THREE.Mesh(
+        this.keyMarkerGeometry,
+        new THREE.MeshBasicMaterial({ color: COLORS.snapPreview, depthTest: false, transparent: true, opacity: 0.55 }),
+      );
+      marker.position.copy(this.vertexPosition(vertex));
+      marker.renderOrder = 3;
+      marker.userData = { preview: true, vertex, scale: 0.6 };
+      marker.name = 'snap-preview';
+      this.hoverGroup.add(marker);
+    }
+    this.requestRender();
+  }
+
   // ---- lines and keys -------------------------------------------------------------------
   clearGroup(group) {
     for (const child of [...group.children]) {
@@ -334,7 +429,7 @@ export class Viewer {
     }
   }
 
-  makeLine(points, closed, color, width, { active, kind, lineId }) {
+  makeLine(points, closed, color, width, { active, kind, lineId, stale = false }) {
     const flat = [];
     for (const p of points) flat.push(p[0], p[1], p[2]);
     if (closed && points.length > 2) {
@@ -348,26 +443,31 @@ export class Viewer {
     for (const ghost of [true, false]) {
       const geometry = new LineGeometry();
       geometry.setPositions(flat);
+      // An out-of-date line (its keys changed, the new answer is not in) is drawn dashed.
       const material = new LineMaterial({
         color,
         linewidth: ghost ? width * 0.75 : width,
         worldUnits: false,
-        transparent: ghost || !active,
-        opacity: ghost ? (active ? 0.35 : 0.2) : active ? 1 : 0.6,
+        transparent: ghost || !active || stale,
+        opacity: ghost ? (active ? 0.35 : 0.2) : stale ? 0.55 : active ? 1 : 0.6,
         depthTest: !ghost,
         depthWrite: !ghost,
+        dashed: stale,
+        // Dashes are measured along the line in world units: a fixed share of the mesh's size.
+        dashSize: (this.radius || 1) * 0.025,
+        gapSize: (this.radius || 1) * 0.02,
       });
       const line = new Line2(geometry, material);
       line.computeLineDistances();
       line.renderOrder = ghost ? 1 : 2;
-      line.userData = { kind, ghost, lineId, active };
+      line.userData = { kind, ghost, lineId, active, stale };
       line.name = `${kind}-line`;
       objects.push(line);
     }
     return objects;
   }
 
-  // lines: [{id, keys, closed, result}], activeId: the active line's id.
+  // lines: [{id, keys, closed, result, stale}], activeId: the active line's id.
   setLines(lines, activeId) {
     if (!this.mesh) return;
     this.clearGroup(this.lineGroup);
@@ -376,14 +476,15 @@ export class Viewer {
       const active = line.id === activeId;
       const r = line.result;
       if (r && r.initial?.points?.length >= 2)
-        for (const o of this.makeLine(r.initial.points, r.closed, COLORS.initial, 2, { active, kind: 'initial', lineId: line.id }))
+        for (const o of this.makeLine(r.initial.points, r.closed, COLORS.initial, 2, { active, kind: 'initial', lineId: line.id, stale: line.stale }))
           this.lineGroup.add(o);
       if (r && r.refined?.points?.length >= 2)
-        for (const o of this.makeLine(r.refined.points, r.closed, COLORS.refined, 3.5, { active, kind: 'refined', lineId: line.id }))
+        for (const o of this.makeLine(r.refined.points, r.closed, COLORS.refined, 3.5, { active, kind: 'refined', lineId: line.id, stale: line.stale }))
           this.lineGroup.add(o);
       line.keys.forEach((v, i) => {
         const hover = this.hoverKey && this.hoverKey.lineId === line.id && this.hoverKey.keyIndex === i;
-        const color = hover ? COLORS.hoverKey : !active ? COLORS.otherKey : i === 0 ? COLORS.firstKey : COLORS.key;
+        const selected = this.selectedKey && this.selectedKey.lineId === line.id && this.selectedKey.keyIndex === i;
+        const color = hover ? COLORS.hoverKey : selected ? COLORS.selectedKey : !active ? COLORS.otherKey : i === 0 ? COLORS.firstKey : COLORS.key;
         const marker = new THREE.Mesh(
           this.keyMarkerGeometry,
           new THREE.MeshBasicMaterial({ color, depthTest: false, transparent: true, opacity: active ? 1 : 0.85 }),
@@ -402,9 +503,9 @@ export class Viewer {
   scaleKeyMarkers() {
     const h = this.canvas.clientHeight || 1;
     const k = (2 * Math.tan(THREE.MathUtils.degToRad(this.camera.fov / 2))) / h;
-    for (const m of this.keyGroup.children) {
+    for (const m of [...this.keyGroup.children, ...this.hoverGroup.children]) {
       const distance = m.position.distanceTo(this.camera.position);
-      m.scale.setScalar(Math.max(1e-9, distance * k * KEY_PIXELS));
+      m.scale.setScalar(Math.max(1e-9, distance * k * KEY_PIXELS * (m.userData.scale ?? 1)));
     }
   }
 
@@ -425,6 +526,13 @@ export class Viewer {
       lineObjects: this.lineGroup.children.length,
       keyMarkers: this.keyGroup.children.length,
       segmentSceneShown: this.segmentGroup.visible && this.segmentGroup.children.length > 0,
+      staleLines: count((u) => u.kind === 'refined' && !u.ghost && u.stale),
+      flatShading: this.flatShading,
+      edgesShown: this.edgesShown,
+      upAxis: this.upAxis,
+      cameraUp: this.camera.up.toArray(),
+      orbitCenter: this.controls.target.toArray(),
+      snapPreview: this.hoverGroup.children[0]?.userData.vertex ?? null,
     };
   }
 

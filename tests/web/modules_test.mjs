@@ -1,0 +1,131 @@
+#!/usr/bin/env node
+// The page's modules that need no browser, with known answers: 1-based numbering of server
+// text, the undo history, session files, vertex rings, snapping, sharp edges and the CAD and
+// up-axis guesses on real meshes from ../shared/data/meshes.
+//   node --test tests/web/modules_test.mjs
+import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import path from 'node:path';
+import test from 'node:test';
+import { fileURLToPath } from 'node:url';
+import { guessUpAxis, looksLikeCad, ringNeighbourhood, sharpEdges, strongestFeatureVertex, vertexAdjacency } from '../../web/src/geometry.js';
+import { History } from '../../web/src/history.js';
+import { parseSession, sessionDocument } from '../../web/src/session.js';
+import { oneBasedNumbers } from '../../web/src/text.js';
+
+const repo = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
+function sharedMesh(name) {
+  const p = path.join(repo, '..', 'shared', 'data', 'meshes', name);
+  assert.ok(fs.existsSync(p), `test mesh missing: ../shared/data/meshes/${name}`);
+  return p;
+}
+
+// A minimal OFF reader (triangles and fan-triangulated polygons), enough for these meshes.
+function readOff(file) {
+  const tokens = fs.readFileSync(file, 'utf8').replace(/#.*$/gm, '').split(/\s+/).filter(Boolean);
+  let i = tokens[0] === 'OFF' ? 1 : 0;
+  const nv = Number(tokens[i++]);
+  const nf = Number(tokens[i++]);
+  i++;
+  const positions = new Float32Array(nv * 3);
+  for (let k = 0; k < nv * 3; ++k) positions[k] = Number(tokens[i++]);
+  const index = [];
+  for (let f = 0; f < nf; ++f) {
+    const n = Number(tokens[i++]);
+    const v = tokens.slice(i, i + n).map(Number);
+    i += n;
+    for (let k = 1; k + 1 < n; ++k) index.push(v[0], v[k], v[k + 1]);
+  }
+  return { positions, index: Uint32Array.from(index), vertexCount: nv };
+}
+
+function extent(positions) {
+  const min = [Infinity, Infinity, Infinity];
+  const max = [-Infinity, -Infinity, -Infinity];
+  for (let i = 0; i < positions.length; i += 3)
+    for (let k = 0; k < 3; ++k) (min[k] = Math.min(min[k], positions[i + k])), (max[k] = Math.max(max[k], positions[i + k]));
+  return max.map((m, k) => m - min[k]);
+}
+
+test('server text reads 1-based, vertex ids stay', () => {
+  assert.equal(oneBasedNumbers('keys 0 and 1 are the same vertex 12'), 'keys 1 and 2 are the same vertex 12');
+  assert.equal(oneBasedNumbers('marching search failed between keys 3 and 0: x'), 'marching search failed between keys 4 and 1: x');
+  assert.equal(oneBasedNumbers('line 0 ends at vertex 701, on neither'), 'line 1 ends at vertex 701, on neither');
+  assert.equal(oneBasedNumbers('lines[2].keys: must be'), 'line 3.keys: must be');
+  assert.equal(oneBasedNumbers('segment 0 had to cross'), 'segment 1 had to cross');
+  assert.equal(oneBasedNumbers('no edge path joins vertices 3 and 4'), 'no edge path joins vertices 3 and 4');
+  assert.equal(oneBasedNumbers('and 1 more loose end(s)'), 'and 1 more loose end(s)');
+});
+
+test('history: undo, redo, a new edit forgets redo, discardLast', () => {
+  const h = new History();
+  h.record({ v: 1 }, 'a');
+  h.record({ v: 2 }, 'b');
+  assert.equal(h.undoLabel, 'b');
+  assert.deepEqual(h.undo({ v: 3 }).snapshot, { v: 2 });
+  assert.equal(h.redoLabel, 'b');
+  assert.deepEqual(h.redo({ v: 2 }).snapshot, { v: 3 });
+  h.undo({ v: 3 });
+  h.record({ v: 2 }, 'c');
+  assert.equal(h.canRedo, false);
+  assert.equal(h.discardLast().label, 'c');
+  assert.equal(h.undoLabel, 'a');
+  assert.equal(new History().undo({}), null);
+});
+
+test('a session round-trips and a wrong one is refused with the reason', () => {
+  const doc = sessionDocument({
+    mesh: { name: 'm.off', id: 'abc', vertexCount: 10, faceCount: 16, description: { format: 'off' } },
+    lines: [{ name: 'Line 1', keys: [1, 2, 3], closed: true }],
+    options: { snake: { iterations: 5 } },
+    upAxis: 'z',
+  });
+  const back = parseSession(JSON.stringify(doc));
+  assert.deepEqual(back.lines, [{ name: 'Line 1', keys: [1, 2, 3], closed: true }]);
+  assert.deepEqual(back.options, { snake: { iterations: 5 } });
+  assert.equal(back.up_axis, 'z');
+  assert.throws(() => parseSession('{'), /not JSON/);
+  assert.throws(() => parseSession('{"format": "other"}'), /not a Featureline session/);
+  const bad = { ...doc, lines: [{ keys: [1, 10] }] };
+  assert.throws(() => parseSession(JSON.stringify(bad)), /line 1: keys must be vertex ids from 0 to 9/);
+});
+
+test('rings and snapping: the strongest feature within the accepted candidates', () => {
+  // A strip of 4 triangles: vertices 0..5, 0-1-2-3-4-5 zig-zag.
+  const index = Uint32Array.from([0, 1, 2, 1, 3, 2, 2, 3, 4, 3, 5, 4]);
+  const adjacency = vertexAdjacency(index, 6);
+  assert.deepEqual(new Set(ringNeighbourhood(adjacency, 0, 1)), new Set([0, 1, 2]));
+  assert.deepEqual(new Set(ringNeighbourhood(adjacency, 0, 2)), new Set([0, 1, 2, 3, 4]));
+  const field = Float32Array.from([0.1, -0.2, 0.15, 3, 0.5, 9]);
+  const ring = ringNeighbourhood(adjacency, 0, 2);
+  assert.equal(strongestFeatureVertex(0, ring, field), 3); // |-3| beats the rest; 5 is 3 rings away
+  assert.equal(strongestFeatureVertex(0, ring, field, (v) => v !== 3), 4);
+  assert.equal(strongestFeatureVertex(0, ring, field, () => true, 5), 0); // nothing is a feature: stay
+  assert.equal(strongestFeatureVertex(0, ring, null), 0);
+});
+
+test('sharp edges: a fold past 30 degrees is one, a flat pair is not; boundaries are marked', () => {
+  const flat = sharpEdges(new Float32Array([0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0]), Uint32Array.from([0, 1, 2, 1, 3, 2]));
+  assert.equal(flat.creaseCount, 0);
+  assert.equal(flat.flatShare, 1);
+  assert.equal(flat.edges.length / 2, 4); // the four boundary edges
+  assert.deepEqual([...flat.onBoundary], [1, 1, 1, 1]);
+  // Vertex 3 lifted out of the plane: the faces meet at 90 degrees along 1-2.
+  const folded = sharpEdges(new Float32Array([0, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 0.5, 0.7071]), Uint32Array.from([0, 1, 2, 1, 3, 2]));
+  assert.equal(folded.creaseCount, 1);
+  assert.equal(folded.flatShare, 0);
+});
+
+test('CAD and up axis on real meshes', () => {
+  const fandisk = readOff(sharedMesh('fandisk.off'));
+  const bunny = readOff(sharedMesh('bunny_closed.off'));
+  const ridge = readOff(path.join(repo, 'samples', 'ridge_field.off'));
+  assert.equal(looksLikeCad(sharpEdges(fandisk.positions, fandisk.index), fandisk.index.length / 3), true);
+  assert.equal(looksLikeCad(sharpEdges(bunny.positions, bunny.index), bunny.index.length / 3), false);
+  assert.equal(looksLikeCad(sharpEdges(ridge.positions, ridge.index), ridge.index.length / 3), false);
+  assert.equal(guessUpAxis(extent(bunny.positions), 'off'), 'y'); // the Stanford scan is Y-up
+  assert.equal(guessUpAxis(extent(ridge.positions), 'off'), 'z'); // a height field z = f(x, y)
+  assert.equal(guessUpAxis(extent(readOff(sharedMesh('hemisphere.off')).positions), 'off'), 'z');
+  assert.equal(guessUpAxis([1, 1, 1], 'stl'), 'z');
+  assert.equal(guessUpAxis([1, 1, 1], 'glb'), 'y');
+});

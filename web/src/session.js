@@ -1,0 +1,57 @@
+// The page's work as a file: the mesh it was made on (name, server id, sizes), the lines
+// (keys are the server's vertex ids, stable for the same file), the options and the view's up
+// axis. Loading one re-creates the lines, uploading the mesh again when the server has
+// forgotten it.
+export const SESSION_FORMAT = 'featureline-session';
+export const SESSION_VERSION = 1;
+
+export function sessionDocument({ mesh, lines, options, upAxis }) {
+  return {
+    format: SESSION_FORMAT,
+    version: SESSION_VERSION,
+    saved: new Date().toISOString(),
+    mesh: mesh ? { name: mesh.name, id: mesh.id, vertices: mesh.vertexCount, faces: mesh.faceCount, format: mesh.description?.format ?? null } : null,
+    up_axis: upAxis,
+    options: structuredClone(options ?? {}),
+    lines: lines.map((l) => ({ name: l.name, keys: [...l.keys], closed: !!l.closed })),
+  };
+}
+
+// Parses and checks a session file's text; throws an Error saying what is wrong.
+export function parseSession(text) {
+  let doc;
+  try {
+    doc = JSON.parse(text);
+  } catch (e) {
+    throw new Error(`the file is not JSON (${e.message})`);
+  }
+  if (!doc || doc.format !== SESSION_FORMAT) throw new Error(`the file is not a Featureline session (no "format": "${SESSION_FORMAT}")`);
+  if (doc.version !== SESSION_VERSION) throw new Error(`session version ${doc.version} is not supported (this page reads version ${SESSION_VERSION})`);
+  if (!doc.mesh || typeof doc.mesh.name !== 'string' || !Number.isInteger(doc.mesh.vertices)) throw new Error('the session names no mesh');
+  if (!Array.isArray(doc.lines)) throw new Error('the session has no "lines" list');
+  doc.lines.forEach((l, i) => {
+    if (!Array.isArray(l.keys) || !l.keys.every((k) => Number.isInteger(k) && k >= 0 && k < doc.mesh.vertices))
+      throw new Error(`line ${i + 1}: keys must be vertex ids from 0 to ${doc.mesh.vertices - 1}`);
+  });
+  if (doc.options != null && typeof doc.options !== 'object') throw new Error('"options" must be an object');
+  return doc;
+}
+
+// The up axis the user chose for a file, remembered per file name in this browser.
+const UP_AXIS_KEY = 'featureline.upAxis.';
+export function rememberedUpAxis(fileName) {
+  try {
+    const v = globalThis.localStorage?.getItem(UP_AXIS_KEY + fileName);
+    return v === 'y' || v === 'z' ? v : null;
+  } catch {
+    return null; // storage disabled: no memory, no harm
+  }
+}
+
+export function rememberUpAxis(fileName, axis) {
+  try {
+    globalThis.localStorage?.setItem(UP_AXIS_KEY + fileName, axis);
+  } catch {
+    // storage disabled
+  }
+}

@@ -1,0 +1,23 @@
+// What the user reads: numbers counted from 1, and error text that says what happened.
+
+// The engine counts keys, segments and lines from 0 in its messages ("keys 0 and 1 are the
+// same vertex", "segment 2 had to cross ...", "line 0 separates no segments", "lines[1].keys");
+// the page counts from 1 everywhere. Vertex ids stay as they are: they are ids, not counts.
+export function oneBasedNumbers(text) {
+  if (!text) return text;
+  const plus1 = (n) => String(Number(n) + 1);
+  // One pass, so a number is never shifted twice.
+  return String(text).replace(
+    /\b(?:(lines|keys)\[(\d+)\]|(keys?|segments?|lines?|pieces?) (\d+)((?:,? and | to | or )(\d+))?)/g,
+    (_, listName, listIndex, what, a, sep, b) => {
+      if (listName) return `${listName === 'lines' ? 'line' : 'key'} ${plus1(listIndex)}`;
+      return `${what} ${plus1(a)}${sep ? sep.replace(/\d+$/, plus1(b)) : ''}`;
+    },
+  );
+}
+
+// An error as one line of text, with the HTTP status when there is one.
+export function errorText(e) {
+  if (e && typeof e === 'object' && 'status' in e && typeof e.toString === 'function' && e.name === 'ApiError') return e.toString();
+  return e?.message ?? String(e);
+}
