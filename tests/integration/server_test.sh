@@ -404,6 +404,22 @@ http "$T/busy-metrics.txt" "$Z/metrics"
 check "metrics count the queue_full rejections" \
   grep -qE '^featureline_rejected_requests_total\{reason="queue_full"\} [1-9]' "$T/busy-metrics.txt"
 
+# Deadlines cancel engine work (engine/cancellation.h): one engine thread, a 1 s deadline, a
+# line whose options ask for 100,000 never-converging snake iterations (about 10 s of work in
+# Release). It is refused at the deadline, and the engine thread is free again at once: the next
+# line is answered 200 (without cancellation it queued behind the first and missed its deadline).
+start_server deadline --threads 1 --deadline-s "$FACTOR" --quiet
+D=${SRV_BASE[deadline]:-http://127.0.0.1:1}
+http "$T/dl-up.json" -H 'Content-Type: application/octet-stream' --data-binary @samples/ridge_field.off "$D/v1/meshes?format=off"
+expect "upload the sample to the deadline server" 201 - POST /v1/meshes "$T/dl-up.json"
+DI=$(jq -r .mesh_id "$T/dl-up.json")
+echo '{"keys": [701, 963, 1184], "options": {"snake": {"iterations": 100000, "tolerance": 0, "spacing": 0.05}}}' >"$T/dl-slow.json"
+http "$T/dl-slow.out" -H 'Content-Type: application/json' --data-binary @"$T/dl-slow.json" "$D/v1/meshes/$DI/feature-lines"
+expect "a line that needs ~10 s against a deadline of $FACTOR s" 503 deadline_exceeded POST "/v1/meshes/$DI/feature-lines" "$T/dl-slow.out"
+echo '{"keys": [701, 963, 1184]}' >"$T/dl-fast.json"
+http "$T/dl-fast.out" -H 'Content-Type: application/json' --data-binary @"$T/dl-fast.json" "$D/v1/meshes/$DI/feature-lines"
+expect "the next line right after it (the engine thread was freed)" 200 - POST "/v1/meshes/$DI/feature-lines" "$T/dl-fast.out"
+
 # ---- 6. hostile input ---------------------------------------------------------------------------
 echo "# 6. hostile input"
 gltf_with_uri() {
