@@ -27,9 +27,7 @@ for tool in curl jq node perl timeout; do
 done
 [ -x "$SERVER" ] || { echo "FAIL no server binary at $SERVER (build it, or set SERVER=...)"; exit 1; }
 [ -f "$CORPUS/glb/regression_amplified_instances.glb" ] || { echo "FAIL missing $CORPUS/glb/regression_amplified_instances.glb"; exit 1; }
-if [ -n "${TIME_FACTOR:-}" ]; then FACTOR=$TIME_FACTOR
-elif ldd "$SERVER" 2>/dev/null | grep -qE 'libasan|libubsan|libtsan'; then FACTOR=3
-else FACTOR=1; fi
+FACTOR=$(time_factor "$SERVER")
 CURL_MAX=$((30 * FACTOR))
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/featureline-hostile.XXXXXX")
 trap cleanup EXIT

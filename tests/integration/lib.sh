@@ -254,3 +254,11 @@ finish() {
   fi
   return 0
 }
+
+# time_factor SERVER: how much to scale every time limit: $TIME_FACTOR when set, 3 for a
+# sanitizer build of SERVER (about 3x slower), else 1.
+time_factor() {
+  if [ -n "${TIME_FACTOR:-}" ]; then echo "$TIME_FACTOR"
+  elif ldd "$1" 2>/dev/null | grep -qE 'libasan|libubsan|libtsan'; then echo 3
+  else echo 1; fi
+}

@@ -51,9 +51,7 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 # A sanitizer build is about 3x slower: scale every time limit.
-if [ -n "${TIME_FACTOR:-}" ]; then FACTOR=$TIME_FACTOR
-elif ldd "$SERVER" 2>/dev/null | grep -qE 'libasan|libubsan|libtsan'; then FACTOR=3
-else FACTOR=1; fi
+FACTOR=$(time_factor "$SERVER")
 CURL_MAX=$((60 * FACTOR))
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/featureline-it.XXXXXX")
 trap cleanup EXIT
