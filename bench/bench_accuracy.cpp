@@ -117,7 +117,23 @@ struct LineSpec {
   std::vector<std::uint32_t> keys;
   bool closed = false;
   std::function<double(const Eigen::Vector3d&)> distance;  ///< to the truth, in units
+  /// CAD chains: the truth's vertex ids and positions (on the clean mesh), and the unit. The
+  /// noisy mesh keeps the ids, so the truth's distance to the noisy surface (the best any line on
+  /// that surface can do) is measured near each of them.
+  std::vector<std::uint32_t> truth_vertices;
+  std::vector<Eigen::Vector3d> truth_points;
+  double unit = 1;
 };
+
+/// Mean distance from the truth chain's vertices to the nearest point of the (noisy) surface
+/// around the same vertex: a floor under the mean distance of any line lying on that surface.
+double surface_floor(const PreparedMesh& mesh, const LineSpec& spec) {
+  if (spec.truth_vertices.empty()) return -1;
+  double sum = 0;
+  for (std::size_t i = 0; i < spec.truth_vertices.size(); ++i)
+    sum += (nearest_surface_point_near(mesh, spec.truth_vertices[i], spec.truth_points[i]).position - spec.truth_points[i]).norm();
+  return sum / double(spec.truth_vertices.size()) / spec.unit;
+}
 
 /// One clean mesh with its lines (a case at one seed).
 struct Scenario {
@@ -165,6 +181,9 @@ LineSpec chain_line(const RawMesh& mesh, const std::vector<std::uint32_t>& chain
   line.keys = std::move(keys);
   line.closed = line_closed;
   line.distance = [truth, closed, unit](const Eigen::Vector3d& p) { return distance_to_polyline(*truth, closed, p) / unit; };
+  line.truth_vertices = chain;
+  line.truth_points = *truth;
+  line.unit = unit;
   return line;
 }
 
@@ -300,6 +319,7 @@ struct LineOutcome {
   double turning = 0, ms = 0;
   int iterations = 0;
   std::size_t fallbacks = 0;
+  double floor = -1;  ///< surface_floor (CAD chains), -1 otherwise
   bool worse() const { return !failed && refined.mean > initial.mean + kWorseTolerance; }
 };
 
@@ -318,6 +338,7 @@ struct RowKey {
 struct RowSummary {
   std::size_t lines = 0, ok = 0, worse = 0, failed = 0, fallbacks = 0;
   double initial_mean = 0, initial_max = 0, refined_mean = 0, refined_max = 0, turning = 0, iterations = 0, ms = 0;
+  double floor = 0;  ///< mean surface floor over the lines that have one; -1 when none has
 };
 
 RowSummary summarize(const Row& row) {
@@ -338,9 +359,11 @@ RowSummary summarize(const Row& row) {
     s.iterations += l.iterations;
     s.fallbacks += l.fallbacks;
     s.worse += l.worse();
+    s.floor += l.floor;
     ms.push_back(l.ms);
   }
   if (s.ok) {
+    s.floor = row.lines.front().floor < 0 ? -1 : s.floor / double(s.ok);
     s.initial_mean /= double(s.ok);
     s.refined_mean /= double(s.ok);
     s.turning /= double(s.ok);
@@ -363,9 +386,10 @@ using Clock = std::chrono::steady_clock;
 }  // namespace
 
 // --trace: what happened to one line, for finding out why it is off.
-void trace_line(const std::string& name, double noise, int seed, const FeatureLineResult& r,
+void trace_line(const std::string& name, double noise, int seed, double estimated_noise, const FeatureLineResult& r,
                 const std::vector<Eigen::Vector3d>& refined, const LineSpec& spec) {
-  std::fprintf(stderr, "%s, noise %g%%, seed %d: initial %.3f, refined %.3f\n", name.c_str(), noise, seed,
+  std::fprintf(stderr, "%s, noise %g%% (estimated %.3f), seed %d: initial %.3f, refined %.3f\n", name.c_str(), noise,
+               estimated_noise, seed,
                line_distance(r.initial_points, r.closed, spec.distance).mean, line_distance(refined, r.closed, spec.distance).mean);
   for (const auto& w : r.warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
   for (const auto& p : r.piece_reports)
@@ -475,13 +499,14 @@ int main(int argc, char** argv) {
             try {
               const auto r = detect_feature_line(*mesh, request);
               const auto refined = refined_positions(r);
-              if (trace) trace_line(c.name, noise, seed, r, refined, spec);
+              if (trace) trace_line(c.name, noise, seed, mesh->statistics.noise, r, refined, spec);
               out.initial = line_distance(r.initial_points, r.closed, spec.distance);
               out.refined = line_distance(refined, r.closed, spec.distance);
               out.turning = closed_turning(refined, r.closed);
               out.iterations = r.iterations;
               out.fallbacks = r.initial.fallbacks.size();
               out.ms = r.timings.total_ms;
+              out.floor = surface_floor(*mesh, spec);
             } catch (const std::exception& e) {
               out.failed = true;
               out.error = e.what();
@@ -500,15 +525,18 @@ int main(int argc, char** argv) {
   for (const auto& [name, count] : chains_per_mesh) std::printf(" %s %zu;", name.c_str(), count);
   std::printf("\n\nDistances in units (grid spacing / truth chain's mean edge); noise: RMS displacement in %% of the\n"
               "grid spacing (fields), outline edge (slab) or mesh mean edge (real CAD); worse: refined mean >\n"
-              "initial mean + %.3f.\n\n", kWorseTolerance);
-  std::printf("| variant | case | triangles | noise %% | lines | init mean | init max | ref mean | ref max | ref/init | worse | turn | fallbk | iters | ms | err |\n");
-  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+              "initial mean + %.3f; floor (CAD): mean distance from the true crease to the nearest point of the\n"
+              "(noisy) surface, under which no line lying on that surface can go.\n\n", kWorseTolerance);
+  std::printf("| variant | case | triangles | noise %% | lines | init mean | init max | ref mean | ref max | ref/init | floor | worse | turn | fallbk | iters | ms | err |\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const auto& [key, row] : rows) {
     const RowSummary s = summarize(row);
-    std::printf("| %s | %s | %zu | %.0f | %zu | %.3f | %.3f | %.3f | %.3f | %s | %zu | %.2f | %zu | %.0f | %.2f | %zu |\n",
+    char floor[16] = "-";
+    if (s.floor >= 0) std::snprintf(floor, sizeof floor, "%.3f", s.floor);
+    std::printf("| %s | %s | %zu | %.0f | %zu | %.3f | %.3f | %.3f | %.3f | %s | %s | %zu | %.2f | %zu | %.0f | %.2f | %zu |\n",
                 variants[key.variant_index].name.c_str(), cases[key.case_index].name.c_str(), row.triangles,
                 cases[key.case_index].noise_levels[key.noise_index], s.lines, s.initial_mean, s.initial_max,
-                s.refined_mean, s.refined_max, ratio_text(s.refined_mean, s.initial_mean).c_str(), s.worse, s.turning,
+                s.refined_mean, s.refined_max, ratio_text(s.refined_mean, s.initial_mean).c_str(), floor, s.worse, s.turning,
                 s.fallbacks, s.iterations, s.ms, s.failed);
   }
 

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <deque>
 
+#include "engine/crease_fit.h"
 #include "engine/errors.h"
 
 namespace featureline {
@@ -14,6 +15,7 @@ double ms_since(Clock::time_point start) { return std::chrono::duration<double, 
 struct Piece {
   std::size_t begin, end;  // indices into the (unrolled) line, both ends pinned
   bool exact = false;      // a clean crease run: kept as it is
+  bool noisy_crease = false;  // a crease run on a noisy mesh: re-fitted (engine/crease_fit.h)
 };
 
 // Whether the mesh edge a-b is a crease of the line's kind (any kind when sign is 0).
@@ -26,13 +28,15 @@ bool is_crease_edge(const PreparedMesh& pm, std::uint32_t a, std::uint32_t b, do
   return false;
 }
 
-// Whether every edge of the piece is a crease of the line's kind. Only whole pieces count: a
-// sharp bend sampled by a mesh whose edges do not follow it has scattered short runs of sharp
-// edges beside the true bend, which the snake must still refine.
-bool is_crease_piece(const PreparedMesh& pm, const std::vector<std::uint32_t>& line, const Piece& piece, double sign) {
-  for (std::size_t i = piece.begin; i < piece.end; ++i)
-    if (!is_crease_edge(pm, line[i], line[i + 1], sign)) return false;
-  return true;
+// The share of the piece's edges that are creases of the line's kind. A clean crease run is kept
+// exactly only when every edge is one: a sharp bend sampled by a mesh whose edges do not follow it
+// has scattered short runs of sharp edges beside the true bend, which the snake must still refine.
+// On a noisy mesh the noise unmarks some edges of a true crease run (a dihedral angle that dips
+// under the threshold), so there a run that is mostly crease is re-fitted as one.
+double crease_share(const PreparedMesh& pm, const std::vector<std::uint32_t>& line, const Piece& piece, double sign) {
+  std::size_t creases = 0;
+  for (std::size_t i = piece.begin; i < piece.end; ++i) creases += is_crease_edge(pm, line[i], line[i + 1], sign);
+  return piece.end > piece.begin ? double(creases) / double(piece.end - piece.begin) : 0.0;
 }
 
 std::vector<SurfacePoint> vertex_points(const PreparedMesh& pm, const std::vector<std::uint32_t>& vertices) {
@@ -126,11 +130,16 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   SnakeOptions snake_options = options.snake;
   if (snake_options.feature_sign == 0 && options.initial.sign_aware)
     snake_options.feature_sign = keys_feature_sign(pm, request.keys, options.initial);
-  // Clean creases are the feature itself: their runs are kept exactly.
-  if (options.exact_crease_edges > 0 && pm.curvature.noise < options.exact_crease_noise) {
-    for (Piece& piece : pieces)
-      piece.exact = piece.end - piece.begin >= std::size_t(options.exact_crease_edges) &&
-                    is_crease_piece(pm, line, piece, snake_options.feature_sign);
+  // Clean creases are the feature itself: their runs are kept exactly. On a noisy mesh a crease
+  // run is re-fitted instead of handed to the snake (see engine/crease_fit.h for why).
+  if (options.exact_crease_edges > 0) {
+    const bool clean = pm.curvature.noise < options.exact_crease_noise;
+    for (Piece& piece : pieces) {
+      const bool long_enough = piece.end - piece.begin >= std::size_t(options.exact_crease_edges);
+      const double share = long_enough ? crease_share(pm, line, piece, snake_options.feature_sign) : 0.0;
+      piece.exact = clean && share == 1.0;
+      piece.noisy_crease = !clean && share >= options.crease_fit.min_crease_share && options.crease_fit.bandwidth > 0;
+    }
   }
 
   std::vector<SurfacePoint>& refined = result.refined;
@@ -149,6 +158,10 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
     if (piece.exact) {
       points = initial_points;
       report.kept = "crease";
+    } else if (piece.noisy_crease) {
+      points = fit_noisy_crease(pm, sub, options.crease_fit).points;
+      report.kept = "crease fit";
+      report.refined_strength = mean_feature_strength(pm, points, snake_options.feature_sign, snake_options.curvature_cap);
     } else if (sub.size() < 3) {
       // a single edge is already straight on the surface
       points = initial_points;

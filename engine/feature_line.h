@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/crease_fit.h"
 #include "engine/feature_strip.h"
 #include "engine/initial_line.h"
 #include "engine/prepared_mesh.h"
@@ -29,7 +30,10 @@ struct FeatureLineOptions {
   int exact_crease_edges = 2;
   /// Noise (RMS along the normal, local edge lengths) above which crease vertices are no longer
   /// trusted to lie on the true crease and crease runs are refined by the snake.
-  double exact_crease_noise = 0.08;
+  double exact_crease_noise = 0.035;
+  /// Crease runs on meshes noisier than that are re-fitted along the chain and put back on the
+  /// surface (engine/crease_fit.h); bandwidth 0 hands them to the snake like any other piece.
+  CreaseFitOptions crease_fit;
   /// Never worse: a refined piece whose mean feature strength along it falls below this share
   /// of its initial line's is replaced by the initial line (and reported in `pieces`).
   double keep_initial_below = 0.9;

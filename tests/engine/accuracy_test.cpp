@@ -214,5 +214,42 @@ TEST(Accuracy, NoisyCreasesAreNeverWorseThanTheInitialLine) {
   }
 }
 
+TEST(Accuracy, NoisyRealCadCreasesAreRefittedCloserToTheTrueCrease) {
+  // Every crease chain of the fandisk (keys at its ends and middle) on the mesh with 10% noise:
+  // the initial line runs on the noisy crease vertices; the crease fit (engine/crease_fit.h) must
+  // bring the lines closer to the clean chain on average (bench_accuracy: 0.89 of the initial
+  // distance; keeping the noisy vertices, as before, is 1.0) and make at most one line worse.
+  const std::string path = require_shared_mesh("fandisk.off");
+  if (path.empty()) return;
+  const RawMesh raw = read_mesh_file(path);
+  const auto chains = find_crease_chains(raw, 30, 10);
+  ASSERT_GE(chains.size(), 10u);
+  const auto mesh = prepare_mesh(with_noise(raw, 0.1, 7));
+  double initial_sum = 0, refined_sum = 0;
+  int worse = 0, fitted = 0;
+  for (const auto& chain : chains) {
+    const auto truth = positions_of(raw, chain.vertices);
+    const auto& v = chain.vertices;
+    const std::size_t n = v.size();
+    FeatureLineRequest request;
+    request.closed = chain.closed;
+    request.keys = chain.closed ? std::vector<std::uint32_t>{v[0], v[n / 3], v[2 * n / 3]}
+                                : std::vector<std::uint32_t>{v.front(), v[n / 2], v.back()};
+    const auto result = detect_feature_line(*mesh, request);
+    for (const auto& piece : result.piece_reports) fitted += piece.kept == "crease fit";
+    double initial = 0, refined = 0;
+    for (const auto& p : result.initial_points) initial += distance_to_polyline(truth, chain.closed, p);
+    for (const auto& p : result.refined) refined += distance_to_polyline(truth, chain.closed, p.position);
+    initial /= double(result.initial_points.size());
+    refined /= double(result.refined.size());
+    initial_sum += initial;
+    refined_sum += refined;
+    worse += refined > initial + 0.002 * mean_edge_length(raw);
+  }
+  EXPECT_GE(fitted, int(chains.size()));  // half the pieces (two per line) or more are crease runs
+  EXPECT_LT(refined_sum, 0.95 * initial_sum);
+  EXPECT_LE(worse, 1);
+}
+
 }  // namespace
 }  // namespace featureline

@@ -1,0 +1,126 @@
+#include "engine/crease_fit.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "engine/feature_line.h"
+
+namespace featureline {
+namespace {
+
+// Barycentric coordinates (w.r.t. a, b, c) of the point of triangle abc nearest to x: the
+// projection on the plane when it falls inside, else the nearest point of the nearest side.
+std::array<double, 3> nearest_on_triangle(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                          const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ax = x - a;
+  const double d00 = ab.dot(ab), d01 = ab.dot(ac), d11 = ac.dot(ac);
+  const double denominator = d00 * d11 - d01 * d01;
+  if (denominator > 1e-300) {
+    const double d20 = ax.dot(ab), d21 = ax.dot(ac);
+    const double v = (d11 * d20 - d01 * d21) / denominator, w = (d00 * d21 - d01 * d20) / denominator;
+    if (v >= 0 && w >= 0 && v + w <= 1) return {1 - v - w, v, w};
+  }
+  // Outside (or degenerate): the best of the three sides.
+  std::array<double, 3> best{1, 0, 0};
+  double best_distance = (x - a).squaredNorm();
+  const std::array<Eigen::Vector3d, 3> corner{a, b, c};
+  for (int side = 0; side < 3; ++side) {
+    const Eigen::Vector3d& p = corner[side];
+    const Eigen::Vector3d& q = corner[(side + 1) % 3];
+    const double length2 = (q - p).squaredNorm();
+    const double t = length2 > 0 ? std::clamp((x - p).dot(q - p) / length2, 0.0, 1.0) : 0.0;
+    const double distance = (x - (p + t * (q - p))).squaredNorm();
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = {0, 0, 0};
+      best[side] = 1 - t;
+      best[(side + 1) % 3] = t;
+    }
+  }
+  return best;
+}
+
+// Cumulative arc length along the chain's vertices.
+std::vector<double> arc_lengths(const PreparedMesh& mesh, const std::vector<std::uint32_t>& chain) {
+  std::vector<double> s(chain.size(), 0.0);
+  for (std::size_t i = 1; i < chain.size(); ++i)
+    s[i] = s[i - 1] + (mesh.positions[chain[i]] - mesh.positions[chain[i - 1]]).norm();
+  return s;
+}
+
+// Local quadratic regression of the chain's positions against arc length at s[i]: the constant
+// term of the weighted least-squares fit x(t) = c0 + c1 t + c2 t^2 (t = (s - s[i]) / h). A
+// quadratic follows a bend of the crease without the inward bias of a plain weighted mean;
+// where too few vertices carry weight for a quadratic (near the ends) a line is fitted.
+Eigen::Vector3d regress_at(const PreparedMesh& mesh, const std::vector<std::uint32_t>& chain,
+                           const std::vector<double>& s, std::size_t i, double h) {
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d rhs = Eigen::Matrix3d::Zero();  // one column per coordinate
+  int support = 0;
+  for (std::size_t j = 0; j < chain.size(); ++j) {
+    const double t = (s[j] - s[i]) / h;
+    if (std::abs(t) > 3) continue;
+    const double w = std::exp(-0.5 * t * t);
+    const Eigen::Vector3d basis(1, t, t * t);
+    normal += w * basis * basis.transpose();
+    rhs += w * basis * mesh.positions[chain[j]].transpose();
+    ++support;
+  }
+  const int terms = support >= 5 ? 3 : 2;
+  const Eigen::MatrixXd a = normal.topLeftCorner(terms, terms);
+  const Eigen::LDLT<Eigen::MatrixXd> solver(a);
+  if (solver.info() != Eigen::Success || !solver.isPositive() || std::abs(a.determinant()) < 1e-12)
+    return mesh.positions[chain[i]];
+  const Eigen::MatrixXd coefficients = solver.solve(rhs.topRows(terms));
+  return coefficients.row(0).transpose();
+}
+
+}  // namespace
+
+SurfacePoint nearest_surface_point_near(const PreparedMesh& mesh, std::uint32_t v, const Eigen::Vector3d& x) {
+  SurfacePoint best = surface_point_at_vertex(mesh, v);
+  double best_distance = (best.position - x).squaredNorm();
+  auto try_faces_of = [&](std::uint32_t u) {
+    for (const auto f : mesh.mesh.vf_range(TriMesh::VertexHandle(int(u)))) {
+      const auto& t = mesh.triangles[std::size_t(f.idx())];
+      const auto w = nearest_on_triangle(x, mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]);
+      const Eigen::Vector3d p = w[0] * mesh.positions[t[0]] + w[1] * mesh.positions[t[1]] + w[2] * mesh.positions[t[2]];
+      const double distance = (p - x).squaredNorm();
+      if (distance < best_distance) {
+        best_distance = distance;
+        best = {p, std::uint32_t(f.idx()), w};
+      }
+    }
+  };
+  try_faces_of(v);
+  for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) try_faces_of(mesh.neighbors[k]);
+  return best;
+}
+
+CreaseFitResult fit_noisy_crease(const PreparedMesh& mesh, const std::vector<std::uint32_t>& chain,
+                                 const CreaseFitOptions& options) {
+  CreaseFitResult result;
+  for (const auto v : chain) result.points.push_back(surface_point_at_vertex(mesh, v));
+  if (options.bandwidth <= 0 || chain.size() < 3) return result;
+  const std::vector<double> s = arc_lengths(mesh, chain);
+  double shift_sum = 0;
+  for (std::size_t i = 1; i + 1 < chain.size(); ++i) {
+    const double edge = local_edge_length(mesh, chain[i]);
+    const Eigen::Vector3d& vertex = mesh.positions[chain[i]];
+    const Eigen::Vector3d estimate = vertex + options.step * (regress_at(mesh, chain, s, i, options.bandwidth * edge) - vertex);
+    const SurfacePoint on_surface = nearest_surface_point_near(mesh, chain[i], estimate);
+    const double shift = (on_surface.position - mesh.positions[chain[i]]).norm() / edge;
+    if (shift > options.max_shift) {
+      ++result.kept_vertices;
+      continue;
+    }
+    result.points[i] = on_surface;
+    shift_sum += shift;
+  }
+  const std::size_t moved = chain.size() - 2 - result.kept_vertices;
+  result.mean_shift = moved > 0 ? shift_sum / double(moved) : 0;
+  return result;
+}
+
+}  // namespace featureline
