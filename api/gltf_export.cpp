@@ -87,7 +87,7 @@ tinygltf::Model build_model(const PreparedMesh& pm, const std::vector<FeatureLin
       Eigen::Vector3d n = pm.vertex_normals[v];
       if (!(n.norm() > 0.5)) n = Eigen::Vector3d(0, 0, 1);  // isolated vertices still need a unit normal
       for (int k = 0; k < 3; ++k) normals.push_back(float(n[k]));
-      curvature.push_back(float(pm.curvature.mean[v]));
+      curvature.push_back(float(dominant_curvature(pm.curvature, std::uint32_t(v))));
     }
     int view = add_view(model, normals.data(), normals.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
     primitive.attributes["NORMAL"] = add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, pm.n_vertices());

@@ -101,4 +101,11 @@ inline double dominant_curvature(const CurvatureField& field, std::uint32_t v) {
   return -field.k_min[v] > field.k_max[v] ? field.k_min[v] : field.k_max[v];
 }
 
+/// dominant_curvature of every vertex: the signed field `/curvature` and `mesh.glb` carry.
+inline std::vector<double> dominant_curvatures(const CurvatureField& field) {
+  std::vector<double> out(field.k_max.size());
+  for (std::size_t v = 0; v < out.size(); ++v) out[v] = dominant_curvature(field, std::uint32_t(v));
+  return out;
+}
+
 }  // namespace featureline

@@ -41,7 +41,7 @@ export function absPercentile(values, q) {
   return abs[lo] + (abs[hi] - abs[lo]) * (pos - lo);
 }
 
-// The symmetric range [-r, r] used for the curvature colours: the 95th percentile of |H|
+// The symmetric range [-r, r] used for the curvature colours: the 95th percentile of |k| (the server's dominant signed principal curvature)
 // (robust to the few extreme values at spikes and boundaries), never 0.
 export function curvatureRange(values) {
   const r = absPercentile(values, 0.95);
