@@ -257,32 +257,39 @@ void read_index_list(PlyBodyReader& body, const PlyProperty& list, std::int64_t 
   }
 }
 
-void read_faces(PlyBodyReader& body, const PlyMeshLayout& layout, const ReadMeshOptions& options, RawMesh& mesh) {
-  const PlyElement& element = *layout.face;
-  mesh.triangles.reserve(element.count);  // bounded by the byte size (check_element_sizes)
-  std::vector<std::uint32_t> corners;
+/// Walks the records of a face or strip element: every property but `list` is skipped, and
+/// on_list(what, n) reads the n indices of each record's `list` (`what()` names the record).
+template <typename OnList>
+void for_each_index_list(PlyBodyReader& body, const PlyElement& element, const PlyProperty* list, const char* record_name,
+                         const OnList& on_list) {
   for (std::uint64_t r = 0; r < element.count; ++r) {
-    const auto what = [&] { return "face " + std::to_string(r + 1) + body.location(); };
+    const auto what = [&] { return record_name + std::to_string(r + 1) + body.location(); };
     for (const auto& p : element.properties) {
-      if (&p != layout.face_list) {
+      if (&p == list) {
+        on_list(what, body.read_list_length(p, what));
+      } else {
         body.skip_property(p, what);
-        continue;
       }
-      const std::int64_t n = body.read_list_length(p, what);
-      if (n < 3) throw MeshFormatError("PLY " + what() + " has " + std::to_string(n) + " vertices; a face needs at least 3.");
-      check_triangle_limit(MeshFormat::ply, mesh.triangles.size() + static_cast<std::size_t>(n) - 2, options);
-      read_index_list(body, p, n, layout.vertex->count, std::nullopt, what, corners);
-      for (std::size_t k = 1; k + 1 < corners.size(); ++k) mesh.triangles.push_back({corners[0], corners[k], corners[k + 1]});
     }
   }
-  mesh.source_faces = element.count;
+}
+
+void read_faces(PlyBodyReader& body, const PlyMeshLayout& layout, const ReadMeshOptions& options, RawMesh& mesh) {
+  mesh.triangles.reserve(layout.face->count);  // bounded by the byte size (check_element_sizes)
+  std::vector<std::uint32_t> corners;
+  for_each_index_list(body, *layout.face, layout.face_list, "face ", [&](const auto& what, std::int64_t n) {
+    if (n < 3) throw MeshFormatError("PLY " + what() + " has " + std::to_string(n) + " vertices; a face needs at least 3.");
+    check_triangle_limit(MeshFormat::ply, mesh.triangles.size() + static_cast<std::size_t>(n) - 2, options);
+    read_index_list(body, *layout.face_list, n, layout.vertex->count, std::nullopt, what, corners);
+    for (std::size_t k = 1; k + 1 < corners.size(); ++k) mesh.triangles.push_back({corners[0], corners[k], corners[k + 1]});
+  });
+  mesh.source_faces = layout.face->count;
 }
 
 /// Decodes the triangle strips (split at restart markers: -1, or the maximum of an unsigned
 /// index type); returns the number of degenerate stitching triangles skipped.
 std::size_t read_strips(PlyBodyReader& body, const PlyMeshLayout& layout, const ReadMeshOptions& options,
                         std::vector<Triangle>& triangles) {
-  const PlyElement& element = *layout.strips;
   const PlyType index_type = layout.strip_list->type;
   const std::int64_t restart = index_type == PlyType::uint8    ? 0xff
                                : index_type == PlyType::uint16 ? 0xffff
@@ -290,24 +297,17 @@ std::size_t read_strips(PlyBodyReader& body, const PlyMeshLayout& layout, const 
                                                                : -1;
   std::size_t degenerate = 0;
   std::vector<std::uint32_t> indices;
-  for (std::uint64_t r = 0; r < element.count; ++r) {
-    const auto what = [&] { return "triangle strip " + std::to_string(r + 1) + body.location(); };
-    for (const auto& p : element.properties) {
-      if (&p != layout.strip_list) {
-        body.skip_property(p, what);
-        continue;
-      }
-      read_index_list(body, p, body.read_list_length(p, what), layout.vertex->count, restart, what, indices);
-      // Each run between restart markers is a strip of its own (its winding starts afresh).
-      auto run = indices.begin();
-      while (run != indices.end()) {
-        const auto run_end = std::find(run, indices.end(), std::numeric_limits<std::uint32_t>::max());
-        degenerate += append_run_triangles(&*run, static_cast<std::size_t>(run_end - run), TriangleRun::strip, triangles);
-        check_triangle_limit(MeshFormat::ply, triangles.size(), options);
-        run = run_end == indices.end() ? run_end : run_end + 1;
-      }
+  for_each_index_list(body, *layout.strips, layout.strip_list, "triangle strip ", [&](const auto& what, std::int64_t n) {
+    read_index_list(body, *layout.strip_list, n, layout.vertex->count, restart, what, indices);
+    // Each run between restart markers is a strip of its own (its winding starts afresh).
+    auto run = indices.begin();
+    while (run != indices.end()) {
+      const auto run_end = std::find(run, indices.end(), std::numeric_limits<std::uint32_t>::max());
+      degenerate += append_run_triangles(&*run, static_cast<std::size_t>(run_end - run), TriangleRun::strip, triangles);
+      check_triangle_limit(MeshFormat::ply, triangles.size(), options);
+      run = run_end == indices.end() ? run_end : run_end + 1;
     }
-  }
+  });
   return degenerate;
 }
 
