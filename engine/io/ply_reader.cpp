@@ -6,8 +6,8 @@
 // Every element count is checked against the byte size before anything is reserved, every list
 // length against the bytes that remain, every index against the vertex count.
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <string>
