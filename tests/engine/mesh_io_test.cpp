@@ -28,6 +28,8 @@
 #include <vector>
 
 #include "engine/errors.h"
+#include "engine/io/byte_order.h"
+#include "engine/io/triangle_strip.h"
 
 namespace featureline {
 namespace {
@@ -488,8 +490,8 @@ TEST(MeshIoObj, EmptyInputs) {
 TEST(MeshIoOff, IdsAndFanTriangulation) {
   LOAD_SHARED(bytes, "chamfer-cube.off");
   const RawMesh mesh = read_mesh(bytes, MeshFormat::off);
-  // Positions come through OpenMesh at single precision: "-0.6 -0.6  1.0" is vertex 0.
-  EXPECT_EQ(mesh.positions[0], (Vec{double(-0.6f), double(-0.6f), 1.0}));
+  // "-0.6 -0.6  1.0" is vertex 0, read in double precision (it came through OpenMesh as float).
+  EXPECT_EQ(mesh.positions[0], (Vec{-0.6, -0.6, 1.0}));
   EXPECT_EQ(mesh.triangles[0], (Tri{0, 1, 2}));  // "4 0 1 2 3"
   EXPECT_EQ(mesh.triangles[1], (Tri{0, 2, 3}));
   EXPECT_EQ(mesh.triangles[2], (Tri{4, 5, 6}));  // "4 4 5 6 7"
@@ -548,7 +550,8 @@ TEST(MeshIoOff, GarbageNanAndBadIndices) {
 TEST(MeshIoPly, AsciiIdsKept) {
   LOAD_SHARED(bytes, "bun_zipper.ply");
   const RawMesh mesh = read_mesh(bytes, MeshFormat::ply);
-  EXPECT_EQ(mesh.positions[0], (Vec{double(-0.0378297f), double(0.12794f), double(0.00447467f)}));
+  // "-0.0378297 0.12794 0.00447467 ..." in double precision (it came through OpenMesh as float).
+  EXPECT_EQ(mesh.positions[0], (Vec{-0.0378297, 0.12794, 0.00447467}));
   EXPECT_EQ(mesh.triangles[0], (Tri{21216, 21215, 20399}));
   EXPECT_EQ(mesh.triangles[1], (Tri{9186, 9280, 14838}));
 }
@@ -568,7 +571,7 @@ TEST(MeshIoPly, TriangleStripsDecodeWithAlternatingWinding) {
 }
 
 TEST(MeshIoPly, ExtraPropertiesListsAndElementsDoNotShiftIds) {
-  // Elements and list properties OpenMesh would misread are removed before it sees the file.
+  // Elements and list properties before, between and after the ones read are skipped by type.
   const std::string ply =
       "ply\nformat ascii 1.0\ncomment hi\n"
       "element vertex 4\nproperty float confidence\nproperty list uchar float weights\nproperty float x\n"
@@ -601,8 +604,8 @@ TEST(MeshIoPly, BinaryBigEndian) {
 }
 
 TEST(MeshIoPly, IntegerCoordinatesAndUnusualListTypes) {
-  // OpenMesh 9 reads int16 coordinates as 0 and rejects list counts other than uchar/int;
-  // the canonical stream it is given avoids both.
+  // Integer coordinates and any integer list types (OpenMesh 9 read int16 coordinates as 0 and
+  // rejected list counts other than uchar/int).
   std::string ply =
       "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty short x\nproperty short y\nproperty short z\n"
       "element face 1\nproperty list ushort ushort vertex_indices\nend_header\n";
@@ -745,6 +748,143 @@ TEST(MeshIoStl, AsciiKeepsDegenerateFacets) {
   EXPECT_THROW_EXACT(read_mesh("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", MeshFormat::stl), MeshFormatError,
                      "ASCII STL ends inside a facet (started on line 2).");
   EXPECT_THROW_EXACT(read_mesh("solid x\nhello\n", MeshFormat::stl), MeshFormatError, "ASCII STL line 2: unexpected 'hello'.");
+}
+
+// ---- double precision in every reader that stores text or doubles ------------------------
+
+// 1.000000000001 is 1 + 4504 ulps of a double and 1.0f as a float: it survives only a reader
+// that keeps doubles.
+constexpr double kFine = 1.000000000001;
+constexpr double kTiny = -2.5e-300;  // below float's range: a float reader flushes it to 0
+
+TEST(MeshIoPrecision, TextFormatsKeepEveryDoubleDigit) {
+  ASSERT_NE(double(float(kFine)), kFine);
+  const Vec fine{kFine, 0.1, kTiny};
+  const std::string v1 = "1.000000000001 0.1 -2.5e-300";
+  const std::map<MeshFormat, std::string> files = {
+      {MeshFormat::obj, "v " + v1 + "\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"},
+      {MeshFormat::off, "OFF\n3 1 0\n" + v1 + "\n1 0 0\n0 1 0\n3 0 1 2\n"},
+      {MeshFormat::ply,
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n" + v1 + "\n1 0 0\n0 1 0\n3 0 1 2\n"},
+      {MeshFormat::stl, "solid s\nfacet normal 0 0 1\nouter loop\nvertex " + v1 +
+                            "\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid s\n"},
+  };
+  for (const auto& [format, text] : files) {
+    SCOPED_TRACE(to_string(format));
+    const RawMesh mesh = read_mesh(text, format);
+    ASSERT_EQ(mesh.positions.size(), 3u);
+    EXPECT_EQ(mesh.positions[0], fine);
+    EXPECT_EQ(mesh.triangles, (std::vector<Tri>{{0, 1, 2}}));
+  }
+}
+
+TEST(MeshIoPrecision, OffAndPlyAcceptCoordinatesBeyondFloatRange) {
+  // They were refused as "outside the single-precision range" while OpenMesh stored floats; OBJ
+  // and STL always accepted them.
+  const RawMesh off = read_mesh("OFF\n3 1 0\n1e300 0 0\n0 1 0\n0 0 -4e39\n3 0 1 2\n", MeshFormat::off);
+  EXPECT_EQ(off.positions[0][0], 1e300);
+  EXPECT_EQ(off.positions[2][2], -4e39);
+  const RawMesh ply = read_mesh(
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n1e300 0 0\n0 1 0\n0 0 1\n3 0 1 2\n",
+      MeshFormat::ply);
+  EXPECT_EQ(ply.positions[0][0], 1e300);  // ASCII values are read as written, whatever the declared type
+}
+
+/// A binary PLY triangle whose double coordinates include kFine, in the given byte order.
+std::string binary_ply_with_doubles(bool big_endian) {
+  std::string ply = std::string("ply\nformat ") + (big_endian ? "binary_big_endian" : "binary_little_endian") +
+                    " 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const auto put = [&](std::uint64_t bits, int bytes) {
+    for (int i = 0; i < bytes; ++i) {
+      const int shift = 8 * (big_endian ? bytes - 1 - i : i);
+      ply += static_cast<char>((bits >> shift) & 0xff);
+    }
+  };
+  for (double v : {kFine, 0.1, kTiny, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0}) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &v, 8);
+    put(bits, 8);
+  }
+  put(3, 1);
+  for (std::uint64_t i : {0, 1, 2}) put(i, 4);
+  return ply;
+}
+
+TEST(MeshIoPrecision, BinaryPlyDoublesAreExactInBothByteOrders) {
+  for (bool big_endian : {false, true}) {
+    SCOPED_TRACE(big_endian ? "big endian" : "little endian");
+    const RawMesh mesh = read_mesh(binary_ply_with_doubles(big_endian), MeshFormat::ply);
+    ASSERT_EQ(mesh.positions.size(), 3u);
+    EXPECT_EQ(mesh.positions[0], (Vec{kFine, 0.1, kTiny}));
+    EXPECT_EQ(mesh.positions[2], (Vec{0, 1, 0}));
+    EXPECT_EQ(mesh.triangles, (std::vector<Tri>{{0, 1, 2}}));
+  }
+}
+
+// ---- shared decoding helpers --------------------------------------------------------------
+
+TEST(MeshIoHelpers, ByteOrderLoads) {
+  const unsigned char bytes[8] = {0x01, 0x02, 0x03, 0x04, 0xBF, 0xC0, 0x00, 0x00};
+  using detail::ByteOrder;
+  EXPECT_EQ(detail::load<std::uint32_t>(bytes, ByteOrder::little_endian), 0x04030201u);
+  EXPECT_EQ(detail::load<std::uint32_t>(bytes, ByteOrder::big_endian), 0x01020304u);
+  EXPECT_EQ(detail::load<std::uint16_t>(bytes, ByteOrder::big_endian), 0x0102u);
+  EXPECT_EQ(detail::load<std::int8_t>(bytes + 4, ByteOrder::big_endian), std::int8_t(-65));
+  EXPECT_EQ(detail::load<std::int16_t>(bytes + 4, ByteOrder::big_endian), std::int16_t(-16448));  // 0xBFC0
+  EXPECT_EQ(detail::load<float>(bytes + 4, ByteOrder::big_endian), -1.5f);                         // BF C0 00 00
+  const unsigned char one_le[8] = {0, 0, 0, 0, 0, 0, 0xF0, 0x3F};
+  const unsigned char one_be[8] = {0x3F, 0xF0, 0, 0, 0, 0, 0, 0};
+  EXPECT_EQ(detail::load_little_endian<double>(one_le), 1.0);
+  EXPECT_EQ(detail::load<double>(one_be, ByteOrder::big_endian), 1.0);
+}
+
+TEST(MeshIoHelpers, TriangleStripAndFanKnownAnswers) {
+  using detail::TriangleRun;
+  std::vector<Tri> out;
+  const std::vector<std::uint32_t> strip = {0, 1, 2, 3, 4, 5};
+  EXPECT_EQ(detail::append_run_triangles(strip.data(), strip.size(), TriangleRun::strip, out), 0u);
+  EXPECT_EQ(out, (std::vector<Tri>{{0, 1, 2}, {2, 1, 3}, {2, 3, 4}, {4, 3, 5}}));
+
+  out.clear();
+  const std::vector<std::uint32_t> fan = {7, 1, 2, 3};
+  EXPECT_EQ(detail::append_run_triangles(fan.data(), fan.size(), TriangleRun::fan, out), 0u);
+  EXPECT_EQ(out, (std::vector<Tri>{{7, 1, 2}, {7, 2, 3}}));
+
+  // Two strips stitched by repeating 3 and 4: the triangles with a repeated corner are skipped
+  // and counted, and the parity of the later ones still follows their position in the run.
+  out = {{9, 9, 9}};  // appended to, never cleared
+  const std::vector<std::uint32_t> stitched = {0, 1, 2, 3, 3, 4, 4, 5, 6};
+  EXPECT_EQ(detail::append_run_triangles(stitched.data(), stitched.size(), TriangleRun::strip, out), 4u);
+  EXPECT_EQ(out, (std::vector<Tri>{{9, 9, 9}, {0, 1, 2}, {2, 1, 3}, {4, 5, 6}}));
+
+  out.clear();
+  EXPECT_EQ(detail::append_run_triangles(strip.data(), 2, TriangleRun::strip, out), 0u);
+  EXPECT_TRUE(out.empty());
+}
+
+TEST(MeshIoPly, StripsRestartWithTheirWindingAndUnsignedMarkers) {
+  // -1 restarts a strip (the winding starts afresh), as does the maximum of an unsigned index type.
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+      "element tristrips 1\nproperty list int ";
+  const std::string vertices = "end_header\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n2 1 0\n";
+  const std::vector<Tri> expected = {{0, 1, 2}, {2, 1, 3}, {1, 2, 3}, {3, 2, 4}};
+  const RawMesh signed_strip = read_mesh(head + "int vertex_indices\n" + vertices + "9 0 1 2 3 -1 1 2 3 4\n", MeshFormat::ply);
+  EXPECT_EQ(signed_strip.triangles, expected);
+  EXPECT_EQ(signed_strip.source_faces, 4u);
+  const RawMesh unsigned_strip =
+      read_mesh(head + "uchar vertex_indices\n" + vertices + "9 0 1 2 3 255 1 2 3 4\n", MeshFormat::ply);
+  EXPECT_EQ(unsigned_strip.triangles, expected);
+
+  const RawMesh stitched = read_mesh(head + "int vertex_indices\n" + vertices + "6 0 1 2 2 3 4\n", MeshFormat::ply);
+  EXPECT_EQ(stitched.triangles, (std::vector<Tri>{{0, 1, 2}, {3, 2, 4}}));
+  EXPECT_EQ(stitched.warnings,
+            (std::vector<std::string>{"PLY triangle strips contain 2 degenerate stitching triangles, which were skipped."}));
+  EXPECT_THROW_EXACT(read_mesh(head + "int vertex_indices\n" + vertices + "4 0 1 2 -2\n", MeshFormat::ply), MeshFormatError,
+                     "PLY triangle strip 1 (line 15) refers to vertex index -2 but the file has only 5 vertices (indices start at 0).");
 }
 
 // ---- glTF / GLB ---------------------------------------------------------------------------

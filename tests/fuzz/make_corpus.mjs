@@ -95,6 +95,40 @@ write('ply', 'tetra_ascii.ply', plyHeader('ascii') + tetra.v.map((p) => p.join('
   write('ply', 'tetra_binary.ply', Buffer.concat([Buffer.from(plyHeader('binary_little_endian')), body]));
 }
 write('ply', 'strip_ascii.ply', plyHeader('ascii', 'tristrips', 'vertex_indices') + tetra.v.map((p) => p.join(' ')).join('\n') + '\n6 0 1 2 3 -1 0\n');
+{
+  // Issue 13's one-pass PLY reader: big-endian doubles (one needing all 52 mantissa bits), a
+  // skipped vertex property, ushort list lengths with uint indices, a list property skipped after
+  // the indices and an element after the faces that is never read.
+  const header =
+    'ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty double x\nproperty uchar flags\nproperty double y\n' +
+    'property double z\nelement face 4\nproperty list ushort uint vertex_indices\nproperty list uchar float uv\n' +
+    'element edge 1\nproperty int a\nproperty int b\nend_header\n';
+  const body = Buffer.alloc(4 * 25 + 4 * (2 + 12 + 1 + 8) + 8);
+  let at = 0;
+  tetra.v.forEach((p, i) => {
+    body.writeDoubleBE(p[0] + (i === 1 ? 1e-12 : 0), at);
+    body.writeUInt8(7, at + 8);
+    body.writeDoubleBE(p[1], at + 9);
+    body.writeDoubleBE(p[2], at + 17);
+    at += 25;
+  });
+  tetra.f.forEach((f) => {
+    body.writeUInt16BE(3, at);
+    f.forEach((v, k) => body.writeUInt32BE(v, at + 2 + 4 * k));
+    body.writeUInt8(2, at + 14);
+    body.writeFloatBE(0.5, at + 15);
+    body.writeFloatBE(0.25, at + 19);
+    at += 23;
+  });
+  body.writeInt32BE(0, at);
+  body.writeInt32BE(1, at + 4);
+  write('ply', 'tetra_binary_be_doubles.ply', Buffer.concat([Buffer.from(header), body]));
+}
+// Strips with uchar indices restart at 255 as well as -1; the winding starts afresh after each.
+write('ply', 'strip_uchar_restart.ply', plyHeader('ascii', 'tristrips', 'vertex_indices').replace('list uchar int', 'list uchar uchar') +
+  tetra.v.map((p) => p.join(' ')).join('\n') + '\n9 0 1 2 3 255 3 2 1 0\n');
+write('off', 'fine_coordinates.off', 'OFF # counts follow\n4 4 0\n' + tetra.v.map((p, i) => p.map((c) => (i === 1 ? c + 1e-12 : c)).join(' ')).join('\n') +
+  '\n' + tetra.f.map((f) => '3 ' + f.join(' ')).join('\n') + '\n');
 const facets = tetra.f.map((f) => f.map((i) => tetra.v[i]));
 write('stl', 'tetra_ascii.stl', 'solid tetra\n' + facets.map((t) =>
   ' facet normal 0 0 0\n  outer loop\n' + t.map((p) => `   vertex ${p.join(' ')}\n`).join('') + '  endloop\n endfacet\n').join('') + 'endsolid tetra\n');

@@ -8,7 +8,8 @@
 #include <memory>
 
 #include "engine/errors.h"
-#include "engine/mesh_io_detail.h"
+#include "engine/io/reader_support.h"
+#include "engine/io/readers.h"
 
 namespace featureline::detail {
 

@@ -1,4 +1,4 @@
-// Private helpers shared by the mesh readers (mesh_io*.cpp). Not part of the engine API.
+// Private helpers shared by the mesh readers in engine/io/. Not part of the engine API.
 #pragma once
 
 #include <array>
@@ -18,12 +18,21 @@ namespace featureline::detail {
 /// "OBJ", "OFF", "PLY", "STL", "glTF", "GLB", "Draco": the name used in messages.
 const char* display_name(MeshFormat format);
 
+// ---- text ----------------------------------------------------------------------------
+
+bool is_space(char c);
+bool starts_with(std::string_view s, std::string_view prefix);
+/// Case-insensitive ASCII comparison.
+bool iequals(std::string_view a, std::string_view b);
+std::string_view trim(std::string_view s);
+
 // ---- strict number parsing (locale independent) ------------------------------------
 
 enum class NumberStatus { ok, not_a_number, non_finite };
 
-/// Parses a decimal real ("-1.5e-3", "2", ".5"). "nan"/"inf" spellings and overflowing values
-/// give non_finite; anything else that is not plain decimal (hex floats, "1,5", "") gives not_a_number.
+/// Parses a decimal real ("-1.5e-3", "2", ".5") to the nearest double. "nan"/"inf" spellings and
+/// overflowing values give non_finite; anything else that is not plain decimal (hex floats, "1,5",
+/// "") gives not_a_number.
 NumberStatus parse_real(std::string_view token, double& value);
 
 /// Parses an optionally signed decimal integer that fits in int64.
@@ -31,8 +40,6 @@ bool parse_integer(std::string_view token, std::int64_t& value);
 
 /// Quotes a token for an error message, shortened to a sensible length.
 std::string quote_token(std::string_view token);
-
-// ---- text scanning -------------------------------------------------------------------
 
 /// Splits text into whitespace-separated tokens while tracking line numbers.
 class TokenScanner {
@@ -78,28 +85,5 @@ class PositionWelder {
 
 void check_vertex_limit(MeshFormat format, std::size_t vertices, const ReadMeshOptions& options);
 void check_triangle_limit(MeshFormat format, std::size_t triangles, const ReadMeshOptions& options);
-
-// ---- per-format readers (each returns a RawMesh that read_mesh validates once more) ---
-
-RawMesh read_obj(std::string_view bytes, const ReadMeshOptions& options);
-RawMesh read_stl(std::string_view bytes, const ReadMeshOptions& options);
-RawMesh read_off(std::string_view bytes, const ReadMeshOptions& options);  // via OpenMesh
-RawMesh read_ply(std::string_view bytes, const ReadMeshOptions& options);  // via OpenMesh
-RawMesh read_gltf(std::string_view bytes, bool binary, const ReadMeshOptions& options);
-RawMesh read_drc(std::string_view bytes, const ReadMeshOptions& options);
-
-/// A decoded Draco mesh: positions of its points and triangles of point indices.
-struct DracoGeometry {
-  std::vector<std::array<double, 3>> positions;
-  std::vector<std::array<std::uint32_t, 3>> triangles;
-};
-
-/// Decodes a Draco triangle-mesh bitstream with draco::Decoder (the only Draco component that
-/// is hardened for untrusted input). `position_unique_id` selects the POSITION attribute by its
-/// Draco unique id (glTF KHR_draco_mesh_compression); without it the named POSITION attribute
-/// is used. `context` names the data in messages ("Draco file", "glTF mesh 3 primitive 0").
-/// \throw MeshFormatError, LimitExceededError
-DracoGeometry decode_draco(const unsigned char* data, std::size_t size, std::optional<std::uint32_t> position_unique_id,
-                           MeshFormat format, const std::string& context, const ReadMeshOptions& options);
 
 }  // namespace featureline::detail
