@@ -86,38 +86,6 @@ double keys_feature_sign(const PreparedMesh& mesh, const std::vector<std::uint32
   return 0;
 }
 
-std::string to_string(InitialMethod method) {
-  switch (method) {
-    case InitialMethod::marching: return "marching";
-    case InitialMethod::feature_path: return "feature-path";
-    case InitialMethod::geodesic: return "geodesic";
-  }
-  return "unknown";
-}
-
-std::optional<InitialMethod> parse_initial_method(const std::string& name) {
-  if (name == "marching") return InitialMethod::marching;
-  if (name == "feature-path" || name == "feature_path") return InitialMethod::feature_path;
-  if (name == "geodesic") return InitialMethod::geodesic;
-  return std::nullopt;
-}
-
-std::string to_string(MarchingCurvatureTerm term) {
-  switch (term) {
-    case MarchingCurvatureTerm::similar_to_current: return "similar-to-current";
-    case MarchingCurvatureTerm::similar_to_end: return "similar-to-end";
-    case MarchingCurvatureTerm::high_magnitude: return "high-magnitude";
-  }
-  return "unknown";
-}
-
-std::optional<MarchingCurvatureTerm> parse_marching_curvature_term(const std::string& name) {
-  if (name == "similar-to-current") return MarchingCurvatureTerm::similar_to_current;
-  if (name == "similar-to-end") return MarchingCurvatureTerm::similar_to_end;
-  if (name == "high-magnitude") return MarchingCurvatureTerm::high_magnitude;
-  return std::nullopt;
-}
-
 double path_length(const PreparedMesh& mesh, const std::vector<std::uint32_t>& path, bool closed) {
   double length = 0;
   for (std::size_t i = 1; i < path.size(); ++i) length += (mesh.positions[path[i]] - mesh.positions[path[i - 1]]).norm();
