@@ -129,6 +129,8 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "featureless edges (1: geodesic)", "", &O::initial, &I::feature_weight_floor),
       option<O>("sign_aware", {}, "Follow only ridges or only valleys when every key agrees in sign", "", &O::initial,
                 &I::sign_aware),
+      option<O>("max_line_edges", {1, 1000}, "Lines longer than this many edges are refused (split them): every "
+                "stage's work grows with the length", "", &O::initial, &I::max_edges),
       option<O>("rings", {0, 8}, "Rings of faces around the initial line in the feature strip (0: from the line's "
                 "length, 2 to 8)", "--rings", &O::strip, &StripOptions::rings),
       option<O>("dense_line_edges", {1, 1000}, "Automatic rings: lines of this many edges get 3 rings, twice as many 4, "
@@ -150,13 +152,13 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
       option<O>("snake.alpha", {0, 1000}, "Elasticity: resistance to stretching (Eq. 12)", "--alpha", &O::snake, &S::alpha),
       option<O>("snake.beta", {0, 1000}, "Rigidity: resistance to bending (Eq. 12)", "--beta", &O::snake, &S::beta),
       option<O>("snake.tau", {1e-4, 1000}, "Time step of the semi-implicit iteration (Eq. 15)", "--tau", &O::snake, &S::tau),
-      option<O>("snake.kappa", {0, 1000}, "Weight of the feature force", "--kappa", &O::snake, &S::kappa),
-      option<O>("snake.exponent", {0.1, 8}, "p in the feature potential |C|^p (the paper: 2)", "", &O::snake, &S::exponent),
+      option<O>("snake.kappa", {0, 1}, "Weight of the feature force", "--kappa", &O::snake, &S::kappa),
+      option<O>("snake.exponent", {0.1, 4}, "p in the feature potential |C|^p (the paper: 2)", "", &O::snake, &S::exponent),
       option<O>("snake.curvature_cap", {0.01, 1000}, "|C| is clamped at this many curvature-scale units", "", &O::snake,
                 &S::curvature_cap),
-      option<O>("snake.max_step", {1e-3, 10}, "Largest move of a point in one iteration (edge lengths)", "", &O::snake,
+      option<O>("snake.max_step", {1e-3, 1}, "Largest move of a point in one iteration (edge lengths)", "", &O::snake,
                 &S::max_step),
-      option<O>("snake.iterations", {0, 1000}, "Iteration cap per piece", "--iterations", &O::snake, &S::max_iterations),
+      option<O>("snake.iterations", {0, 500}, "Iteration cap per piece", "--iterations", &O::snake, &S::max_iterations),
       option<O>("snake.tolerance", {0, 10}, "Stop when the line's shape changes less than this per iteration (edge "
                 "lengths)", "", &O::snake, &S::tolerance),
       option<O>("snake.spacing", {0.25, 10}, "Distance between snake points (edge lengths)", "--spacing", &O::snake,

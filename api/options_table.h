@@ -61,7 +61,7 @@ const OptionTable<CurvatureOptions>& curvature_option_table();
 /// Limits of a request's shape rather than of one option, served beside the tables.
 struct RequestLimits {
   static constexpr std::size_t max_lines = 64;          ///< lines per feature-line or segmentation request
-  static constexpr std::size_t max_keys_per_line = 1000;
+  static constexpr std::size_t max_keys_per_line = 128;
   static constexpr std::size_t max_json_bytes = 4 << 20;
 };
 

@@ -53,6 +53,9 @@ struct InitialLineOptions {
   /// Feature strength uses only curvature of the keys' sign (ridges or valleys) when the keys
   /// agree in sign; |H| otherwise. Keeps a ridge path from jumping into a neighbouring valley.
   bool sign_aware = true;
+  /// The longest line accepted, in edges: every later stage costs in proportion to the line's
+  /// length, so this bounds a line's work whatever its keys (InvalidInputError beyond).
+  int max_edges = 1000;
 };
 
 /// One fallback from marching to feature_path, as reported in `stats.fallbacks`.
