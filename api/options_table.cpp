@@ -67,8 +67,9 @@ json check_option_value(const OptionSpec& spec, const json& value, const std::st
       const std::string expected = field + " must be one of " + joined(spec.choices);
       if (!value.is_string()) throw InvalidInputError(expected);
       const std::string name = value.get<std::string>();
-      for (const auto& choice : spec.choices)
-        if (choice == name) return value;
+      for (const auto* names : {&spec.choices, &spec.aliases})
+        for (const auto& choice : *names)
+          if (choice == name) return value;
       throw InvalidInputError(expected + ", not " + quoted_excerpt(name));
     }
     case OptionKind::integer: {
@@ -89,9 +90,13 @@ json describe_options(const std::vector<OptionSpec>& specs) {
   json rows = json::array();
   for (const auto& spec : specs) {
     json row = {{"name", spec.name}, {"type", kind_name(spec.kind)}, {"default", spec.default_value}, {"description", spec.description}};
-    if (spec.kind == OptionKind::number || spec.kind == OptionKind::integer) {
+    if (spec.kind == OptionKind::number) {
       row["minimum"] = spec.minimum;
       row["maximum"] = spec.maximum;
+    }
+    if (spec.kind == OptionKind::integer) {
+      row["minimum"] = static_cast<long long>(spec.minimum);
+      row["maximum"] = static_cast<long long>(spec.maximum);
     }
     if (spec.kind == OptionKind::choice) row["enum"] = spec.choices;
     if (!spec.cli_flag.empty()) row["cli_flag"] = spec.cli_flag;

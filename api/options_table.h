@@ -35,6 +35,7 @@ struct OptionSpec {
   OptionKind kind = OptionKind::number;
   double minimum = 0, maximum = 0;   ///< number and integer
   std::vector<std::string> choices;  ///< choice: the accepted names
+  std::vector<std::string> aliases;  ///< choice: older names still accepted, never printed
   nlohmann::json default_value;      ///< the struct's default, as JSON
   std::string description;           ///< one line
   /// The CLI flag setting it, "" for none. A boolean flag sets the opposite of the default.
@@ -137,12 +138,13 @@ OptionKind option_kind() {
   else return OptionKind::number;
 }
 
+/// The names of an enum's values (`primary`), or its accepted aliases (!primary).
 template <typename Enum>
-std::vector<std::string> enum_choices() {
+std::vector<std::string> enum_choices(bool primary = true) {
   std::vector<std::string> names;
   const auto& entries = EnumNames<Enum>::entries;
   for (std::size_t i = 0; i < entries.size(); ++i)
-    if (is_primary_enum_name<Enum>(i)) names.push_back(entries[i].second);
+    if (is_primary_enum_name<Enum>(i) == primary) names.push_back(entries[i].second);
   return names;
 }
 
@@ -159,7 +161,10 @@ OptionField<Options> option(const char* name, OptionRange range, const char* des
   field.spec.kind = option_kind<Value>();
   field.spec.minimum = range.minimum;
   field.spec.maximum = range.maximum;
-  if constexpr (std::is_enum_v<Value>) field.spec.choices = enum_choices<Value>();
+  if constexpr (std::is_enum_v<Value>) {
+    field.spec.choices = enum_choices<Value>();
+    field.spec.aliases = enum_choices<Value>(false);
+  }
   field.spec.description = description;
   field.spec.cli_flag = cli_flag;
   field.read = [path...](const Options& o) { return option_to_json(member_at(const_cast<Options&>(o), path...)); };
