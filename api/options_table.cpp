@@ -9,13 +9,13 @@ namespace featureline {
 
 using nlohmann::json;
 
-namespace {
-
 std::string format_number(double x) {
   std::ostringstream s;
   s << x;
   return s.str();
 }
+
+namespace {
 
 std::string joined(const std::vector<std::string>& names) {
   std::string text;

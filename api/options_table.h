@@ -70,6 +70,9 @@ struct RequestLimits {
 /// integers). \throw InvalidInputError "\"<where>\" must be an integer from 1 to 2000" and the like.
 nlohmann::json check_option_value(const OptionSpec& spec, const nlohmann::json& value, const std::string& where);
 
+/// A limit or default as errors and help print it: 0.0001, 500, 1e+06.
+std::string format_number(double x);
+
 /// "prefix.name", or "name" when the prefix is empty.
 std::string option_path(const std::string& prefix, const std::string& name);
 /// "snake.iterations" -> "snake/iterations" (a JSON pointer without its leading '/').

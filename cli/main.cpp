@@ -6,7 +6,6 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -86,12 +85,6 @@ bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-std::string format_number(double x) {
-  std::ostringstream text;
-  text << x;
-  return text.str();
-}
-
 // "a, b or c": the accepted names of a choice flag.
 std::string either(const std::vector<std::string>& names) {
   std::string text;
@@ -101,7 +94,7 @@ std::string either(const std::vector<std::string>& names) {
 
 std::string value_text(const json& value) {
   if (value.is_string()) return value.get<std::string>();
-  if (value.is_number()) return format_number(value.get<double>());
+  if (value.is_number()) return featureline::format_number(value.get<double>());
   return value.dump();
 }
 
@@ -118,7 +111,7 @@ std::string flag_help(const featureline::OptionTable<Options>& table) {
     std::string detail = "default " + value_text(spec.default_value);
     if (spec.kind == OptionKind::choice) detail = either(spec.choices) + "; " + detail;
     if (spec.kind == OptionKind::number || spec.kind == OptionKind::integer)
-      detail = format_number(spec.minimum) + " to " + format_number(spec.maximum) + "; " + detail;
+      detail = featureline::format_number(spec.minimum) + " to " + featureline::format_number(spec.maximum) + "; " + detail;
     if (spec.kind == OptionKind::boolean)
       text += "  " + flag + spec.name + " = " + value_text(!spec.default_value.template get<bool>()) + ": " + spec.description + "\n";
     else
