@@ -1,7 +1,6 @@
 #include "api/feature_line_json.h"
 
-#include <cmath>
-#include <sstream>
+#include "api/options_table.h"
 
 #include "engine/errors.h"
 
@@ -12,166 +11,11 @@ using nlohmann::json;
 
 json point_json(const Eigen::Vector3d& p) { return json::array({p.x(), p.y(), p.z()}); }
 
-// Reads fields of one JSON object, refusing unknown names and wrong types.
-class FieldReader {
- public:
-  FieldReader(const json& object, std::string path) : object_(object), path_(std::move(path)) {
-    if (!object_.is_object()) throw InvalidInputError("\"" + path_ + "\" must be a JSON object");
-  }
-  void number(const char* name, double& out, double lo, double hi) {
-    if (const json* v = take(name)) {
-      if (!v->is_number()) throw InvalidInputError(where(name) + " must be a number");
-      const double x = v->get<double>();
-      if (!(x >= lo && x <= hi))
-        throw InvalidInputError(where(name) + " must be between " + fmt(lo) + " and " + fmt(hi));
-      out = x;
-    }
-  }
-  void integer(const char* name, int& out, int lo, int hi) {
-    if (const json* v = take(name)) {
-      // JSON Schema counts 2.0 as an integer, so do we.
-      if (!v->is_number() || !std::isfinite(v->get<double>()) || v->get<double>() != std::floor(v->get<double>()))
-        throw InvalidInputError(where(name) + " must be an integer");
-      if (std::abs(v->get<double>()) > 1e9) throw InvalidInputError(where(name) + " must be between " + fmt(lo) + " and " + fmt(hi));
-      const auto x = static_cast<long long>(v->get<double>());
-      if (x < lo || x > hi) throw InvalidInputError(where(name) + " must be between " + fmt(lo) + " and " + fmt(hi));
-      out = int(x);
-    }
-  }
-  void boolean(const char* name, bool& out) {
-    if (const json* v = take(name)) {
-      if (!v->is_boolean()) throw InvalidInputError(where(name) + " must be true or false");
-      out = v->get<bool>();
-    }
-  }
-  template <typename Enum, typename Parse>
-  void choice(const char* name, Enum& out, Parse parse, const char* allowed) {
-    if (const json* v = take(name)) {
-      if (!v->is_string()) throw InvalidInputError(where(name) + " must be one of " + allowed);
-      const auto parsed = parse(v->get<std::string>());
-      if (!parsed) throw InvalidInputError(where(name) + " must be one of " + allowed + ", not \"" + v->get<std::string>() + "\"");
-      out = *parsed;
-    }
-  }
-  const json* object(const char* name) {
-    const json* v = take(name);
-    if (v != nullptr && !v->is_object()) throw InvalidInputError(where(name) + " must be a JSON object");
-    return v;
-  }
-  std::string child(const char* name) const { return path_ + "." + name; }
-  void finish() const {
-    for (auto it = object_.begin(); it != object_.end(); ++it)
-      if (std::find(used_.begin(), used_.end(), it.key()) == used_.end())
-        throw InvalidInputError("unknown option \"" + path_ + "." + it.key() + "\"");
-  }
-
- private:
-  const json* take(const char* name) {
-    auto it = object_.find(name);
-    if (it == object_.end()) return nullptr;
-    used_.emplace_back(name);
-    return &*it;
-  }
-  std::string where(const char* name) const { return "\"" + path_ + "." + name + "\""; }
-  static std::string fmt(double x) {
-    std::ostringstream s;
-    s << x;
-    return s.str();
-  }
-  const json& object_;
-  std::string path_;
-  std::vector<std::string> used_;
-};
-
 }  // namespace
 
-void apply_options_json(const json& j, FeatureLineOptions& o) {
-  FieldReader r(j, "options");
-  r.choice("initial", o.initial.method, parse_initial_method, "marching, feature-path, geodesic");
-  if (const json* w = r.object("weights")) {
-    FieldReader wr(*w, r.child("weights"));
-    wr.number("alpha", o.initial.marching_alpha, 0, 1e3);
-    wr.number("beta", o.initial.marching_beta, 0, 1e3);
-    wr.number("gamma", o.initial.marching_gamma, 0, 1e3);
-    wr.number("delta", o.initial.marching_delta, 0, 1e3);
-    wr.finish();
-  }
-  r.choice("curvature_term", o.initial.marching_curvature_term, parse_marching_curvature_term,
-           "similar-to-current, similar-to-end, high-magnitude");
-  r.boolean("fallback", o.initial.fallback);
-  r.number("feature_weight_floor", o.initial.feature_weight_floor, 1e-4, 1);
-  r.boolean("sign_aware", o.initial.sign_aware);
-  r.integer("rings", o.strip.rings, 0, 8);
-  r.choice("flattening", o.strip.flattening, parse_strip_flattening, "automatic, conformal, similar-triangles");
-  r.number("max_edge_distortion", o.strip.max_edge_distortion, 0.01, 100);
-  r.boolean("refine", o.refine);
-  r.boolean("pin_interior_keys", o.pin_interior_keys);
-  r.integer("min_piece_edges", o.min_piece_edges, 2, 1000);
-  r.integer("exact_crease_edges", o.exact_crease_edges, 0, 1000);
-  r.number("exact_crease_noise", o.exact_crease_noise, 0, 1);
-  r.number("keep_initial_below", o.keep_initial_below, 0, 1);
-  if (const json* s = r.object("snake")) {
-    FieldReader sr(*s, r.child("snake"));
-    SnakeOptions& so = o.snake;
-    sr.number("alpha", so.alpha, 0, 1e3);
-    sr.number("beta", so.beta, 0, 1e3);
-    sr.number("tau", so.tau, 1e-4, 1e3);
-    sr.number("kappa", so.kappa, 0, 1e3);
-    sr.number("exponent", so.exponent, 0.1, 8);
-    sr.number("curvature_cap", so.curvature_cap, 0.01, 1e3);
-    sr.number("max_step", so.max_step, 1e-3, 10);
-    sr.integer("iterations", so.max_iterations, 0, 100000);
-    sr.number("tolerance", so.tolerance, 0, 10);
-    sr.number("spacing", so.spacing, 0.05, 10);
-    sr.integer("resample_every", so.resample_every, 1, 1000);
-    sr.choice("force", so.force, parse_snake_force, "paper, smooth");
-    sr.boolean("normal_force_only", so.normal_force_only);
-    sr.number("sharp_crest_drop", so.sharp_crest_drop, 0, 0.99);
-    sr.boolean("normal_step", so.normal_step);
-    sr.finish();
-  }
-  r.finish();
-}
+void apply_options_json(const json& j, FeatureLineOptions& o) { apply_options(feature_line_option_table(), j, "options", o); }
 
-json options_to_json(const FeatureLineOptions& o) {
-  return {
-      {"initial", to_string(o.initial.method)},
-      {"weights",
-       {{"alpha", o.initial.marching_alpha},
-        {"beta", o.initial.marching_beta},
-        {"gamma", o.initial.marching_gamma},
-        {"delta", o.initial.marching_delta}}},
-      {"curvature_term", to_string(o.initial.marching_curvature_term)},
-      {"fallback", o.initial.fallback},
-      {"feature_weight_floor", o.initial.feature_weight_floor},
-      {"sign_aware", o.initial.sign_aware},
-      {"rings", o.strip.rings},
-      {"flattening", to_string(o.strip.flattening)},
-      {"max_edge_distortion", o.strip.max_edge_distortion},
-      {"refine", o.refine},
-      {"pin_interior_keys", o.pin_interior_keys},
-      {"min_piece_edges", o.min_piece_edges},
-      {"exact_crease_edges", o.exact_crease_edges},
-      {"exact_crease_noise", o.exact_crease_noise},
-      {"keep_initial_below", o.keep_initial_below},
-      {"snake",
-       {{"alpha", o.snake.alpha},
-        {"beta", o.snake.beta},
-        {"tau", o.snake.tau},
-        {"kappa", o.snake.kappa},
-        {"exponent", o.snake.exponent},
-        {"curvature_cap", o.snake.curvature_cap},
-        {"max_step", o.snake.max_step},
-        {"iterations", o.snake.max_iterations},
-        {"tolerance", o.snake.tolerance},
-        {"spacing", o.snake.spacing},
-        {"resample_every", o.snake.resample_every},
-        {"force", to_string(o.snake.force)},
-        {"normal_force_only", o.snake.normal_force_only},
-        {"sharp_crest_drop", o.snake.sharp_crest_drop},
-        {"normal_step", o.snake.normal_step}}},
-  };
-}
+json options_to_json(const FeatureLineOptions& o) { return options_json(feature_line_option_table(), o); }
 
 json feature_line_to_json(const FeatureLineResult& r) {
   json initial_points = json::array();

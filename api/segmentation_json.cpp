@@ -6,14 +6,6 @@ namespace featureline {
 
 using nlohmann::json;
 
-std::string to_string(SegmentationMode mode) { return mode == SegmentationMode::remesh ? "remesh" : "snap"; }
-
-std::optional<SegmentationMode> parse_segmentation_mode(const std::string& name) {
-  if (name == "snap") return SegmentationMode::snap;
-  if (name == "remesh") return SegmentationMode::remesh;
-  return std::nullopt;
-}
-
 json segmentation_to_json(const SegmentationResult& r, SegmentationMode mode) {
   json segments = json::array();
   for (const auto& s : r.segments)

@@ -6,13 +6,11 @@
 #include <optional>
 #include <string>
 
+#include "api/options_table.h"
 #include "engine/prepared_mesh.h"
 #include "engine/segmentation.h"
 
 namespace featureline {
-
-std::string to_string(SegmentationMode mode);
-std::optional<SegmentationMode> parse_segmentation_mode(const std::string& name);
 
 /// {"mode", "labels": [label per face], "segments": [{"label", "faces", "area", "boundary_length",
 ///  "bbox": {"min", "max"}}], "warnings": [..], "total_area", "cut_edges", "timings_ms": {"segment"},

@@ -147,13 +147,15 @@ std::vector<double> local_edge_lengths(const std::vector<Eigen::Vector3d>& P, co
 std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
                             const AdjacencyView& adj, const std::vector<char>& on_crease,
                             const std::vector<double>& local, double radius, std::size_t stride,
-                            const std::vector<double>& fallback, CurvatureField& field) {
+                            const std::vector<double>& fallback, CurvatureField& field, const Cancellation* cancel) {
   const std::size_t n = P.size();
   std::vector<double> residual(n, -1.0);
   parallel_ranges(n, [&](std::size_t begin, std::size_t end) {
     std::vector<std::uint32_t> stamp(n, 0), hood;
     std::uint32_t generation = 0;
     for (std::size_t v = begin; v < end; ++v) {
+      // Worker threads must not throw: they stop, and the caller throws below.
+      if ((v & 4095) == 0 && cancel != nullptr && cancel->requested()) break;
       if (v % stride != 0) continue;
       field.k_max[v] = field.k_min[v] = fallback[v];
       if (!(local[v] > 0)) continue;
@@ -170,6 +172,7 @@ std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::ve
       residual[v] = fit.residual / local[v];
     }
   });
+  throw_if_cancelled(cancel);
   return residual;
 }
 
@@ -329,10 +332,12 @@ double relative_roughness(const CurvatureField& field, const AdjacencyView& adja
 // how finely the mesh samples its features: on a 245k-triangle ridge at 10-20% noise about
 // 64-100 passes (the line's error 0.07-0.10 edge lengths instead of 0.36-0.88 unsmoothed), on a
 // 5k-triangle one or a clean mesh 0-2 (bench_accuracy).
-int smooth_until_noise_is_gone(CurvatureField& field, const AdjacencyView& adjacency, double tolerance, int max_passes) {
+int smooth_until_noise_is_gone(CurvatureField& field, const AdjacencyView& adjacency, double tolerance, int max_passes,
+                               const Cancellation* cancel) {
   int passes = 0;
   double roughness = relative_roughness(field, adjacency);
   while (passes < max_passes && roughness > 0) {
+    throw_if_cancelled(cancel);
     const int run = std::min(std::max(passes, 1), max_passes - passes);
     std::vector<double> k_max = field.k_max, k_min = field.k_min;
     for (int pass = 0; pass < run; ++pass) smooth_once(field, adjacency);
@@ -369,17 +374,9 @@ int blur_limited_passes(const std::vector<Eigen::Vector3d>& P, const std::vector
 
 }  // namespace
 
-std::string to_string(CurvatureMethod method) { return method == CurvatureMethod::jet ? "jet" : "cotangent"; }
-
-std::optional<CurvatureMethod> parse_curvature_method(const std::string& name) {
-  if (name == "jet") return CurvatureMethod::jet;
-  if (name == "cotangent") return CurvatureMethod::cotangent;
-  return std::nullopt;
-}
-
 CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& positions,
                                        const std::vector<Eigen::Vector3d>& normals, const AdjacencyView& adjacency,
-                                       const CurvatureOptions& options) {
+                                       const CurvatureOptions& options, const Cancellation* cancel) {
   if (!(options.radius >= 0 && options.radius <= CurvatureLimits::max_radius))
     throw InvalidInputError("curvature radius must be between 0 (automatic) and " +
                             std::to_string(int(CurvatureLimits::max_radius)) + " edge lengths");
@@ -408,6 +405,7 @@ CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Ei
   } else {
     field.crease.assign(adjacency.neighbors.size(), 0);
   }
+  throw_if_cancelled(cancel);
   std::vector<char>& on_crease = field.on_crease;
   on_crease.assign(n, 0);
   for (std::uint32_t v = 0; v < n; ++v)
@@ -420,20 +418,23 @@ CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Ei
     constexpr double kProbeRadius = 2;
     const std::size_t stride = std::max<std::size_t>(1, n / 20000);
     std::vector<double> residual =
-        fit_all(positions, normals, adjacency, on_crease, local, kProbeRadius, stride, field.mean, field);
+        fit_all(positions, normals, adjacency, on_crease, local, kProbeRadius, stride, field.mean, field, cancel);
     residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return r < 0; }), residual.end());
     field.noise = median_of(residual);
       // Wider neighbourhoods average noise away (the variance of a fitted curvature falls as
     // radius^-6 at a fixed density) but blur features; grow the radius with the noise only.
     field.radius = options.radius > 0 ? options.radius : std::clamp(2 + 100 * field.noise, kProbeRadius, 6.0);
     if (field.radius != kProbeRadius || stride != 1)
-      fit_all(positions, normals, adjacency, on_crease, local, field.radius, 1, field.mean, field);
+      fit_all(positions, normals, adjacency, on_crease, local, field.radius, 1, field.mean, field, cancel);
   }
   if (options.smoothing_passes < 0) {
     field.smoothing_passes =
-        smooth_until_noise_is_gone(field, adjacency, options.smoothing_tolerance, blur_limited_passes(positions, local));
+        smooth_until_noise_is_gone(field, adjacency, options.smoothing_tolerance, blur_limited_passes(positions, local), cancel);
   } else {
-    for (int pass = 0; pass < options.smoothing_passes; ++pass) smooth_once(field, adjacency);
+    for (int pass = 0; pass < options.smoothing_passes; ++pass) {
+      throw_if_cancelled(cancel);
+      smooth_once(field, adjacency);
+    }
     field.smoothing_passes = options.smoothing_passes;
   }
   return field;

@@ -18,6 +18,8 @@
 
 #include <Eigen/Core>
 
+#include "engine/cancellation.h"
+#include "engine/enum_names.h"
 #include "engine/tri_mesh.h"
 
 namespace featureline {
@@ -26,8 +28,11 @@ enum class CurvatureMethod {
   cotangent,  ///< the paper: one-ring cotangent mean curvature H (Meyer et al. 2003)
   jet,        ///< principal curvatures of a weighted degree-2 fit over a neighbourhood radius
 };
-std::string to_string(CurvatureMethod method);
-std::optional<CurvatureMethod> parse_curvature_method(const std::string& name);
+template <>
+struct EnumNames<CurvatureMethod> {
+  static constexpr std::array<std::pair<CurvatureMethod, const char*>, 2> entries{{{CurvatureMethod::jet, "jet"},
+                                                                                  {CurvatureMethod::cotangent, "cotangent"}}};
+};
 
 struct CurvatureOptions {
   CurvatureMethod method = CurvatureMethod::jet;
@@ -75,10 +80,11 @@ struct AdjacencyView {
   const std::vector<std::uint32_t>& neighbors;
 };
 
-/// \throw InvalidInputError for options out of range.
+/// \throw InvalidInputError for options out of range; CancelledError once `cancel` is requested
+///        (checked every 4096 vertices of the fits and every smoothing pass).
 CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& positions,
                                        const std::vector<Eigen::Vector3d>& normals, const AdjacencyView& adjacency,
-                                       const CurvatureOptions& options = {});
+                                       const CurvatureOptions& options = {}, const Cancellation* cancel = nullptr);
 
 /// The signed mean curvature of every vertex by the cotangent formula (exposed for tests).
 std::vector<double> compute_mean_curvature(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& normals);

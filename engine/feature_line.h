@@ -51,7 +51,8 @@ struct FeatureLineRequest {
 struct PieceReport {
   std::uint32_t from = 0, to = 0;  ///< mesh vertices at its ends
   std::size_t edges = 0;           ///< initial line edges in it
-  /// "refined" (the snake's line), "crease" (an exact crease run), "initial" (the snake's line
+  /// "refined" (the snake's line), "crease" (an exact crease run), "crease fit" (a noisy crease
+  /// run re-fitted by engine/crease_fit.h), "initial" (the snake's line
   /// was worse, or the piece is a single edge, or the strip could not be refined)
   std::string kept = "refined";
   std::string reason;              ///< why the initial line was kept

@@ -371,22 +371,6 @@ void mark_valid_triangles(const PreparedMesh& pm, const FeatureStrip& strip, con
 
 }  // namespace
 
-std::string to_string(StripFlattening flattening) {
-  switch (flattening) {
-    case StripFlattening::similar_triangles: return "similar-triangles";
-    case StripFlattening::conformal: return "conformal";
-    case StripFlattening::automatic: break;
-  }
-  return "automatic";
-}
-
-std::optional<StripFlattening> parse_strip_flattening(const std::string& name) {
-  if (name == "automatic") return StripFlattening::automatic;
-  if (name == "conformal") return StripFlattening::conformal;
-  if (name == "similar-triangles") return StripFlattening::similar_triangles;
-  return std::nullopt;
-}
-
 FlatStrip flatten_strip(const PreparedMesh& pm, const FeatureStrip& strip, const StripOptions& options) {
   const std::size_t n = strip.vertices.size();
   const auto unplaced = [n] {

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include "engine/enum_names.h"
 #include "engine/prepared_mesh.h"
 
 namespace featureline {
@@ -29,8 +30,13 @@ enum class StripFlattening {
   /// domain (clean meshes: it is exact on developable strips and cheaper), conformal elsewhere.
   automatic,
 };
-std::string to_string(StripFlattening flattening);
-std::optional<StripFlattening> parse_strip_flattening(const std::string& name);
+template <>
+struct EnumNames<StripFlattening> {
+  static constexpr std::array<std::pair<StripFlattening, const char*>, 3> entries{
+      {{StripFlattening::automatic, "automatic"},
+       {StripFlattening::conformal, "conformal"},
+       {StripFlattening::similar_triangles, "similar-triangles"}}};
+};
 
 struct StripOptions {
   StripFlattening flattening = StripFlattening::automatic;

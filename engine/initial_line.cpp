@@ -1,6 +1,7 @@
 #include "engine/initial_line.h"
 
 #include <algorithm>
+#include <iterator>
 #include <cmath>
 #include <queue>
 #include <sstream>
@@ -84,38 +85,6 @@ double keys_feature_sign(const PreparedMesh& mesh, const std::vector<std::uint32
   if (positive == int(keys.size())) return 1;
   if (negative == int(keys.size())) return -1;
   return 0;
-}
-
-std::string to_string(InitialMethod method) {
-  switch (method) {
-    case InitialMethod::marching: return "marching";
-    case InitialMethod::feature_path: return "feature-path";
-    case InitialMethod::geodesic: return "geodesic";
-  }
-  return "unknown";
-}
-
-std::optional<InitialMethod> parse_initial_method(const std::string& name) {
-  if (name == "marching") return InitialMethod::marching;
-  if (name == "feature-path" || name == "feature_path") return InitialMethod::feature_path;
-  if (name == "geodesic") return InitialMethod::geodesic;
-  return std::nullopt;
-}
-
-std::string to_string(MarchingCurvatureTerm term) {
-  switch (term) {
-    case MarchingCurvatureTerm::similar_to_current: return "similar-to-current";
-    case MarchingCurvatureTerm::similar_to_end: return "similar-to-end";
-    case MarchingCurvatureTerm::high_magnitude: return "high-magnitude";
-  }
-  return "unknown";
-}
-
-std::optional<MarchingCurvatureTerm> parse_marching_curvature_term(const std::string& name) {
-  if (name == "similar-to-current") return MarchingCurvatureTerm::similar_to_current;
-  if (name == "similar-to-end") return MarchingCurvatureTerm::similar_to_end;
-  if (name == "high-magnitude") return MarchingCurvatureTerm::high_magnitude;
-  return std::nullopt;
 }
 
 double path_length(const PreparedMesh& mesh, const std::vector<std::uint32_t>& path, bool closed) {
@@ -334,14 +303,16 @@ InitialLineResult find_initial_line(const PreparedMesh& mesh, const std::vector<
   };
   // Later keys are blocked for earlier segments, so a segment does not run through a key it
   // does not end at (the line would then visit that key twice).
-  std::vector<std::uint32_t> other_keys;
+  // Merged rather than inserted one by one: linear per segment, so many keys stay cheap.
+  std::vector<std::uint32_t> sorted_keys = keys;
+  std::sort(sorted_keys.begin(), sorted_keys.end());
+  sorted_keys.erase(std::unique(sorted_keys.begin(), sorted_keys.end()), sorted_keys.end());
 
   for (std::size_t seg = 0; seg < segments; ++seg) {
     const auto a = keys[seg], b = keys[(seg + 1) % keys.size()];
-    std::vector<std::uint32_t> blocked = used;
-    for (auto k : keys)
-      if (k != a && k != b) blocked.insert(std::lower_bound(blocked.begin(), blocked.end(), k), k);
-    blocked.erase(std::unique(blocked.begin(), blocked.end()), blocked.end());
+    std::vector<std::uint32_t> blocked;
+    blocked.reserve(used.size() + sorted_keys.size());
+    std::set_union(used.begin(), used.end(), sorted_keys.begin(), sorted_keys.end(), std::back_inserter(blocked));
     // The segment's own ends must stay reachable.
     blocked.erase(std::remove_if(blocked.begin(), blocked.end(), [&](std::uint32_t v) { return v == a || v == b; }),
                   blocked.end());
@@ -374,6 +345,11 @@ InitialLineResult find_initial_line(const PreparedMesh& mesh, const std::vector<
       result.vertices.push_back(a);
     }
     result.vertices.insert(result.vertices.end(), path->begin() + 1, path->end());
+    // Every later stage costs in proportion to the line's length: bounded here, by design.
+    if (result.vertices.size() - 1 > std::size_t(options.max_edges))
+      throw InvalidInputError("the line through the keys has more than " + std::to_string(options.max_edges) +
+                              " edges (reached at key " + std::to_string((seg + 1) % keys.size()) +
+                              "); split it into shorter lines");
     mark_used(*path);
     if (!closed || seg + 1 < segments) result.key_indices.push_back(result.vertices.size() - 1);
   }

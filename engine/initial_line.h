@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "engine/cancellation.h"
+#include "engine/enum_names.h"
 #include "engine/prepared_mesh.h"
 
 namespace featureline {
@@ -16,8 +17,13 @@ enum class InitialMethod {
   feature_path,  ///< minimal path whose edge cost falls with |mean curvature|
   geodesic,      ///< plain shortest edge path, the paper's baseline (Fig. 3b)
 };
-std::string to_string(InitialMethod method);
-std::optional<InitialMethod> parse_initial_method(const std::string& name);
+template <>
+struct EnumNames<InitialMethod> {
+  static constexpr std::array<std::pair<InitialMethod, const char*>, 4> entries{{{InitialMethod::marching, "marching"},
+                                                                                {InitialMethod::feature_path, "feature-path"},
+                                                                                {InitialMethod::geodesic, "geodesic"},
+                                                                                {InitialMethod::feature_path, "feature_path"}}};
+};
 
 /// What f_C compares; the paper's text allows all three readings.
 enum class MarchingCurvatureTerm {
@@ -25,8 +31,13 @@ enum class MarchingCurvatureTerm {
   similar_to_end,      ///< "every vertex ... should have high-curvature similar to v_e": |C_vi - C_ve|
   high_magnitude,      ///< "features are located in high-curvature regions": rank by |C_vi|
 };
-std::string to_string(MarchingCurvatureTerm term);
-std::optional<MarchingCurvatureTerm> parse_marching_curvature_term(const std::string& name);
+template <>
+struct EnumNames<MarchingCurvatureTerm> {
+  static constexpr std::array<std::pair<MarchingCurvatureTerm, const char*>, 3> entries{
+      {{MarchingCurvatureTerm::similar_to_current, "similar-to-current"},
+       {MarchingCurvatureTerm::similar_to_end, "similar-to-end"},
+       {MarchingCurvatureTerm::high_magnitude, "high-magnitude"}}};
+};
 
 struct InitialLineOptions {
   InitialMethod method = InitialMethod::feature_path;
@@ -42,6 +53,9 @@ struct InitialLineOptions {
   /// Feature strength uses only curvature of the keys' sign (ridges or valleys) when the keys
   /// agree in sign; |H| otherwise. Keeps a ridge path from jumping into a neighbouring valley.
   bool sign_aware = true;
+  /// The longest line accepted, in edges: every later stage costs in proportion to the line's
+  /// length, so this bounds a line's work whatever its keys (InvalidInputError beyond).
+  int max_edges = 1000;
 };
 
 /// One fallback from marching to feature_path, as reported in `stats.fallbacks`.

@@ -107,7 +107,7 @@ std::size_t PreparedMesh::memory_bytes() const {
   return bytes;
 }
 
-std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options) {
+std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options, const Cancellation* cancel) {
   const auto start = Clock::now();
   // OpenMesh prints add_face failures ("patch re-linking failed") to std::cerr; we handle and
   // report every such face ourselves, so its stream is switched off once for the process.
@@ -134,6 +134,7 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   pm.source_triangle.reserve(raw.triangles.size());
   pm.triangles.reserve(raw.triangles.size());
   for (std::uint32_t t = 0; t < raw.triangles.size(); ++t) {
+    if ((t & 4095) == 0) throw_if_cancelled(cancel);
     const auto& tri = raw.triangles[t];
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) {
       if (stats.dropped_faces++ == 0) first_dropped = t;
@@ -243,9 +244,10 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   stats.bbox_min = {lo.x(), lo.y(), lo.z()};
   stats.bbox_max = {hi.x(), hi.y(), hi.z()};
 
+  throw_if_cancelled(cancel);
   pm.vertex_normals = compute_vertex_normals(mesh);
   pm.curvature = compute_curvature_field(mesh, pm.positions, pm.vertex_normals, {pm.neighbor_offsets, pm.neighbors},
-                                         options.curvature);
+                                         options.curvature, cancel);
   stats.curvature_method = to_string(options.curvature.method);
   stats.noise = pm.curvature.noise;
   stats.curvature_radius = pm.curvature.radius;

@@ -85,8 +85,10 @@ struct PreparedMesh {
 };
 
 /// Builds the prepared mesh from a raw triangle soup.
-/// \throw GeometryError when no usable triangle remains.
-std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options = {});
+/// \throw GeometryError when no usable triangle remains; CancelledError once `cancel` is
+///        requested (checked every 4096 faces and through the curvature stage).
+std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options = {},
+                                                 const Cancellation* cancel = nullptr);
 
 /// Mean length of v's edges: the unit of distance near v. Meshes mix edges 100 times apart
 /// in length (CAD tessellations, adaptive remeshes, separate parts), so a mesh-wide mean edge

@@ -885,8 +885,9 @@ std::string percent(double fraction) {
 }  // namespace
 
 SegmentationResult segment_mesh(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& lines,
-                                const SegmentationOptions& options) {
+                                const SegmentationOptions& options, const Cancellation* cancel) {
   const auto start = Clock::now();
+  throw_if_cancelled(cancel);
   if (lines.empty()) throw InvalidInputError("segmentation needs at least one feature line");
   if (!(options.min_segment_area_fraction >= 0 && options.min_segment_area_fraction < 1))
     throw InvalidInputError("min_segment_area_fraction must be in [0, 1)");
@@ -931,6 +932,7 @@ SegmentationResult segment_mesh(const PreparedMesh& mesh, const std::vector<Feat
     std::vector<std::vector<std::uint32_t>> chains(lines.size());
     std::vector<std::vector<char>> linked(lines.size());  // linked[i][k]: chain[k-1] -- chain[k] is an edge
     for (std::size_t i = 0; i < lines.size(); ++i) {
+      throw_if_cancelled(cancel);
       auto& chain = chains[i];
       auto append = [&](std::uint32_t v) {
         if (chain.empty()) {
@@ -997,6 +999,7 @@ SegmentationResult segment_mesh(const PreparedMesh& mesh, const std::vector<Feat
     Tracer tracer(mesh, vf0, snap);
     Remesher remesher(mesh, across0, snap);
     for (std::size_t i = 0; i < lines.size(); ++i) {
+      throw_if_cancelled(cancel);
       std::vector<SurfacePoint> points = lines[i].refined;
       if (!lines[i].closed) {
         // Join each loose end to the nearest boundary vertex or point of another line nearby.
@@ -1062,6 +1065,7 @@ SegmentationResult segment_mesh(const PreparedMesh& mesh, const std::vector<Feat
     across = &across_new;
   }
 
+  throw_if_cancelled(cancel);
   // Label: faces connected across uncut edges; count what the cuts added to the components.
   std::vector<int> labels;
   const int base = flood_fill(*across, labels);

@@ -83,8 +83,9 @@ struct SegmentationResult {
 /// read).
 /// \throw InvalidInputError for no lines, a line with fewer than two points, a face id out of
 ///        range, bad barycentric coordinates or bad options;
-///        GeometryError when the lines close no region ("the lines close no region: ...").
+///        GeometryError when the lines close no region ("the lines close no region: ...");
+///        CancelledError once `cancel` is requested (checked per line and before labelling).
 SegmentationResult segment_mesh(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& lines,
-                                const SegmentationOptions& options = {});
+                                const SegmentationOptions& options = {}, const Cancellation* cancel = nullptr);
 
 }  // namespace featureline

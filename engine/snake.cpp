@@ -230,14 +230,6 @@ void zero_gradient_across_sharp_crests(const FeatureStrip& strip, const FlatStri
 
 }  // namespace
 
-std::string to_string(SnakeForce force) { return force == SnakeForce::paper ? "paper" : "smooth"; }
-
-std::optional<SnakeForce> parse_snake_force(const std::string& name) {
-  if (name == "paper") return SnakeForce::paper;
-  if (name == "smooth") return SnakeForce::smooth;
-  return std::nullopt;
-}
-
 StripPoint locate_by_walking(const FeatureStrip& strip, const FlatStrip& flat, std::uint32_t start,
                              const Eigen::Vector2d& target) {
   StripPoint point;

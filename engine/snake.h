@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "engine/cancellation.h"
+#include "engine/enum_names.h"
 #include "engine/feature_strip.h"
 #include "engine/prepared_mesh.h"
 
@@ -26,8 +27,11 @@ enum class SnakeForce {
   /// the crest is.
   smooth,
 };
-std::string to_string(SnakeForce force);
-std::optional<SnakeForce> parse_snake_force(const std::string& name);
+template <>
+struct EnumNames<SnakeForce> {
+  static constexpr std::array<std::pair<SnakeForce, const char*>, 2> entries{{{SnakeForce::paper, "paper"},
+                                                                             {SnakeForce::smooth, "smooth"}}};
+};
 
 /// Distances are in units of the strip's mean edge length, curvature in units of the mesh's
 /// curvature scale, so the defaults work at any mesh size and resolution.

@@ -4,6 +4,8 @@
 // <resolv.h>, whose `_res` macro breaks Eigen's templates.
 #include "api/feature_line_json.h"
 #include "api/gltf_export.h"
+#include "api/options_table.h"
+#include "api/requests.h"
 #include "api/segmentation_json.h"
 #include "engine/errors.h"
 #include "engine/feature_line.h"
@@ -38,9 +40,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
-constexpr std::size_t kMaxLinesPerRequest = 64;
-constexpr std::size_t kMaxKeysPerLine = 10000;
-constexpr std::size_t kMaxJsonBytes = 4 << 20;
+constexpr std::size_t kMaxJsonBytes = RequestLimits::max_json_bytes;
 
 // The time routing started on this worker thread (set in the pre-routing handler), for the
 // access log and the latency metrics.
@@ -243,14 +243,25 @@ struct FeaturelineServer::Impl {
   }
 
   // ---- helpers shared by handlers -------------------------------------------------------
+  // The request's deadline as a point in time, shared by its engine work.
+  Clock::time_point request_deadline() const {
+    return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.deadline_s));
+  }
+
+  // Runs job(cancel) on the engine pool and waits for it until the request's deadline. The job's
+  // Cancellation carries that deadline, so work that is refused or times out stops at its next
+  // check instead of holding an engine thread (preparation, segmentation, mesh export).
   template <typename Job>
   auto run_on_pool(Job job) {
-    auto future = pool.try_submit(std::move(job));
+    const auto deadline = request_deadline();
+    const auto cancel = std::make_shared<Cancellation>(deadline);
+    auto future = pool.try_submit([job = std::move(job), cancel]() mutable { return job(cancel.get()); });
     if (!future) {
       metrics.record_rejected("queue_full");
       throw HttpError(503, "overloaded", "the server is busy; retry shortly", {{"Retry-After", "1"}});
     }
-    if (future->wait_for(std::chrono::duration<double>(options.deadline_s)) != std::future_status::ready) {
+    if (future->wait_until(deadline) != std::future_status::ready) {
+      cancel->cancel();
       metrics.record_rejected("deadline");
       throw HttpError(503, "deadline_exceeded",
                       "the request took longer than the server's deadline of " + std::to_string(options.deadline_s) + " s",
@@ -318,7 +329,7 @@ struct FeaturelineServer::Impl {
     }));
     http.Get(mesh + "/mesh\\.glb", guarded("/v1/meshes/{id}/mesh.glb", [this](const auto& req, auto& res) {
       auto session = session_or_404(req.matches[1]);
-      std::string glb = run_on_pool([session] { return feature_line_to_glb(*session->mesh, {}, true); });
+      std::string glb = run_on_pool([session](const Cancellation*) { return feature_line_to_glb(*session->mesh, {}, true); });
       res.set_header("Cache-Control", "private, max-age=3600");
       // The page's largest download: gzip when accepted (httplib compresses no model/* type).
       set_content_gzip_if_accepted(req, res, std::move(glb), "model/gltf-binary");
@@ -331,6 +342,12 @@ struct FeaturelineServer::Impl {
     }));
     http.Post(mesh + "/segmentation", guarded("/v1/meshes/{id}/segmentation", [this](const auto& req, auto& res) {
       segmentation(req, res);
+    }));
+    http.Get("/v1/options", guarded("/v1/options", [](const auto&, auto& res) {
+      // Every option with its type, default, limits and description (the page's inputs use it).
+      static const std::string description = describe_api_options().dump();
+      res.set_header("Cache-Control", "public, max-age=3600");
+      res.set_content(description, "application/json");
     }));
     http.Get("/healthz", guarded("/healthz", [this](const auto&, auto& res) {
       write_json(res, 200,
@@ -478,13 +495,13 @@ struct FeaturelineServer::Impl {
                       "could not tell the mesh format from its bytes; pass ?format=obj|off|ply|stl|glb|gltf|drc");
 
     const MeshFormat fmt = *format;
-    MeshSession session = run_on_pool([body = std::move(body), fmt, limits = read_limits]() {
+    MeshSession session = run_on_pool([body = std::move(body), fmt, limits = read_limits](const Cancellation* cancel) {
       const auto t0 = Clock::now();
       RawMesh raw = read_mesh(body, fmt, limits);
       MeshSession s;
       s.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
       s.format = fmt;
-      s.mesh = prepare_mesh(std::move(raw));
+      s.mesh = prepare_mesh(std::move(raw), {}, cancel);
       s.bytes = s.mesh->memory_bytes();
       return s;
     });
@@ -518,59 +535,13 @@ struct FeaturelineServer::Impl {
     write_json(res, 200, {{"vertices", h.size()}, {"curvature", h}});
   }
 
-  static std::uint32_t nearest_vertex(const PreparedMesh& mesh, const Eigen::Vector3d& p) {
-    std::uint32_t best = 0;
-    double best_d = HUGE_VAL;
-    for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
-      if (mesh.component[v] < 0) continue;
-      const double d = (mesh.positions[v] - p).squaredNorm();
-      if (d < best_d) best_d = d, best = v;
-    }
-    return best;
-  }
-
-  FeatureLineRequest parse_line(const json& j, const PreparedMesh& mesh, const std::string& where) {
-    if (!j.is_object()) throw InvalidInputError(where + " must be a JSON object");
-    for (auto it = j.begin(); it != j.end(); ++it)
-      if (it.key() != "keys" && it.key() != "closed" && it.key() != "options")
-        throw InvalidInputError("unknown field \"" + where + "." + it.key() + "\"");
-    FeatureLineRequest line;
-    const auto keys = j.find("keys");
-    if (keys == j.end() || !keys->is_array()) throw InvalidInputError(where + ".keys must be an array of vertex ids or points");
-    if (keys->size() > kMaxKeysPerLine) throw InvalidInputError(where + ".keys has more than 10000 keys");
-    for (std::size_t i = 0; i < keys->size(); ++i) {
-      const json& k = (*keys)[i];
-      const std::string at = where + ".keys[" + std::to_string(i) + "]";
-      if (k.is_number_unsigned()) {
-        const auto id = k.get<std::uint64_t>();
-        if (id >= mesh.n_vertices())
-          throw InvalidInputError(at + " is vertex " + std::to_string(id) + ", but the mesh has only " +
-                                  std::to_string(mesh.n_vertices()) + " vertices");
-        line.keys.push_back(std::uint32_t(id));
-      } else if (k.is_object() && k.size() == 1 && k.contains("point") && k["point"].is_array() && k["point"].size() == 3 &&
-                 k["point"][0].is_number() && k["point"][1].is_number() && k["point"][2].is_number()) {
-        const Eigen::Vector3d p(k["point"][0].get<double>(), k["point"][1].get<double>(), k["point"][2].get<double>());
-        if (!p.allFinite()) throw InvalidInputError(at + ".point must be finite");
-        line.keys.push_back(nearest_vertex(mesh, p));
-      } else {
-        throw InvalidInputError(at + " must be a vertex id (integer >= 0) or {\"point\": [x, y, z]}");
-      }
-    }
-    if (const auto closed = j.find("closed"); closed != j.end()) {
-      if (!closed->is_boolean()) throw InvalidInputError(where + ".closed must be true or false");
-      line.closed = closed->get<bool>();
-    }
-    if (const auto opts = j.find("options"); opts != j.end()) apply_options_json(*opts, line.options);
-    return line;
-  }
-
   // Lines run in parallel on the pool; each job shares the immutable mesh.
   // The batch shares one Cancellation with the request's deadline: work stops when the deadline
   // passes, and when the batch is refused or a line fails, its other lines stop too instead of
   // holding workers for an answer nobody will read.
   std::vector<FeatureLineResult> run_lines(const std::shared_ptr<const MeshSession>& session,
                                            const std::vector<FeatureLineRequest>& lines) {
-    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.deadline_s));
+    const auto deadline = request_deadline();
     const auto cancel = std::make_shared<Cancellation>(deadline);
     struct CancelUnlessDone {
       std::shared_ptr<Cancellation> cancel;
@@ -613,41 +584,21 @@ struct FeaturelineServer::Impl {
     return body;
   }
 
-  std::vector<FeatureLineRequest> parse_line_list(const json& list, const PreparedMesh& mesh) {
-    if (!list.is_array() || list.empty() || list.size() > kMaxLinesPerRequest)
-      throw InvalidInputError("\"lines\" must be an array of 1 to 64 line requests");
-    std::vector<FeatureLineRequest> lines;
-    for (std::size_t i = 0; i < list.size(); ++i) lines.push_back(parse_line(list[i], mesh, "lines[" + std::to_string(i) + "]"));
-    return lines;
-  }
-
   void segmentation(const httplib::Request& req, httplib::Response& res) {
     auto session = session_or_404(req.matches[1]);
     const bool glb = req.has_param("format") ? req.get_param_value("format") == "glb" : accepts(req, "model/gltf-binary");
     if (req.has_param("format") && !glb && req.get_param_value("format") != "json")
       throw HttpError(400, "invalid_request", "format must be json or glb");
     const json body = json_body(req);
-    SegmentationOptions options_;
-    for (auto it = body.begin(); it != body.end(); ++it)
-      if (it.key() != "lines" && it.key() != "mode" && it.key() != "merge_tiny_segments")
-        throw InvalidInputError("unknown field \"" + it.key() + "\"");
-    if (body.contains("merge_tiny_segments")) {
-      if (!body["merge_tiny_segments"].is_boolean()) throw InvalidInputError("\"merge_tiny_segments\" must be true or false");
-      options_.merge_tiny_segments = body["merge_tiny_segments"].get<bool>();
-    }
+    const SegmentationOptions segmentation_options = parse_segmentation_options(body);
     if (!body.contains("lines")) throw InvalidInputError("\"lines\" is required");
-    if (body.contains("mode")) {
-      const auto mode = body["mode"].is_string() ? parse_segmentation_mode(body["mode"].get<std::string>()) : std::nullopt;
-      if (!mode) throw InvalidInputError("\"mode\" must be \"snap\" or \"remesh\"");
-      options_.mode = *mode;
-    }
     const auto lines = parse_line_list(body["lines"], *session->mesh);
     const auto results = run_lines(session, lines);
-    const SegmentationResult segments = run_on_pool([session, results, options_] {
-      return segment_mesh(*session->mesh, results, options_);
+    const SegmentationResult segments = run_on_pool([session, results, segmentation_options](const Cancellation* cancel) {
+      return segment_mesh(*session->mesh, results, segmentation_options, cancel);
     });
     if (glb) res.set_content(segmentation_to_glb(*session->mesh, segments), "model/gltf-binary");
-    else write_json(res, 200, segmentation_to_json(segments, options_.mode));
+    else write_json(res, 200, segmentation_to_json(segments, segmentation_options.mode));
   }
 
   void feature_lines(const httplib::Request& req, httplib::Response& res) {
@@ -663,15 +614,8 @@ struct FeaturelineServer::Impl {
     } else if (accepts(req, "model/gltf+json")) {
       answer = "gltf";
     }
-    const json body = json_body(req);
-    std::vector<FeatureLineRequest> lines;
-    const bool batch = body.contains("lines");
-    if (batch) {
-      if (body.size() != 1) throw InvalidInputError("with \"lines\", no other top-level field is allowed");
-      lines = parse_line_list(body["lines"], *session->mesh);
-    } else {
-      lines.push_back(parse_line(body, *session->mesh, "request"));
-    }
+    bool batch = false;
+    const std::vector<FeatureLineRequest> lines = parse_feature_line_body(json_body(req), *session->mesh, batch);
     const std::vector<FeatureLineResult> results = run_lines(session, lines);
     if (answer == "glb") {
       res.set_content(feature_line_to_glb(*session->mesh, results, false), "model/gltf-binary");

@@ -123,8 +123,8 @@ TEST(FeatureLineJson, OptionsAreStrict) {
   EXPECT_EQ(error_of(R"({"snake": {"alpah": 1}})"), "unknown option \"options.snake.alpah\"");
   EXPECT_EQ(error_of(R"({"initial": "dijkstra"})"),
             "\"options.initial\" must be one of marching, feature-path, geodesic, not \"dijkstra\"");
-  EXPECT_EQ(error_of(R"({"rings": 2.5})"), "\"options.rings\" must be an integer");
-  EXPECT_EQ(error_of(R"({"rings": 99})"), "\"options.rings\" must be between 0 and 8");
+  EXPECT_EQ(error_of(R"({"rings": 2.5})"), "\"options.rings\" must be an integer from 0 to 8");
+  EXPECT_EQ(error_of(R"({"rings": 99})"), "\"options.rings\" must be an integer from 0 to 8");
   EXPECT_EQ(error_of(R"([1, 2])"), "\"options\" must be a JSON object");
   // Round trip: the defaults printed are accepted back unchanged.
   FeatureLineOptions defaults;

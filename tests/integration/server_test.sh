@@ -403,17 +403,20 @@ check "metrics count the queue_full rejections" \
   grep -qE '^featureline_rejected_requests_total\{reason="queue_full"\} [1-9]' "$T/busy-metrics.txt"
 
 # Deadlines cancel engine work (engine/cancellation.h): one engine thread, a 1 s deadline, a
-# line whose options ask for 100,000 never-converging snake iterations (about 10 s of work in
-# Release). It is refused at the deadline, and the engine thread is free again at once: the next
-# line is answered 200 (without cancellation it queued behind the first and missed its deadline).
+# batch of 64 lines at the option caps (api/options_table.cpp), each a serpentine through 26 keys
+# of about 640 edges (about 2.5 s per line in Release on a loaded 2-core machine, so minutes in
+# all). It is refused at the deadline, and the engine thread is free again at once: the next line
+# is answered 200 (without cancellation it queued behind the batch and missed its deadline).
 start_server deadline --threads 1 --deadline-s "$FACTOR" --quiet
 D=${SRV_BASE[deadline]:-http://127.0.0.1:1}
 http "$T/dl-up.json" -H 'Content-Type: application/octet-stream' --data-binary @samples/ridge_field.off "$D/v1/meshes?format=off"
 expect "upload the sample to the deadline server" 201 - POST /v1/meshes "$T/dl-up.json"
 DI=$(jq -r .mesh_id "$T/dl-up.json")
-echo '{"keys": [701, 963, 1184], "options": {"snake": {"iterations": 100000, "tolerance": 0, "spacing": 0.05}}}' >"$T/dl-slow.json"
+jq -n '[range(1; 40; 3)] | to_entries | map((.value * 41) as $row | if .key % 2 == 0 then [$row + 1, $row + 39] else [$row + 39, $row + 1] end) | add
+  | {lines: [range(64) as $i | {keys: ., options: {rings: 8, min_piece_edges: 2, max_edge_distortion: 100,
+     snake: {iterations: 500, tolerance: 0, spacing: 0.25, kappa: 1, exponent: 4, max_step: 1, resample_every: 1}}}]}' >"$T/dl-slow.json"
 http "$T/dl-slow.out" -H 'Content-Type: application/json' --data-binary @"$T/dl-slow.json" "$D/v1/meshes/$DI/feature-lines"
-expect "a line that needs ~10 s against a deadline of $FACTOR s" 503 deadline_exceeded POST "/v1/meshes/$DI/feature-lines" "$T/dl-slow.out"
+expect "64 lines at the option caps against a deadline of $FACTOR s" 503 deadline_exceeded POST "/v1/meshes/$DI/feature-lines" "$T/dl-slow.out"
 echo '{"keys": [701, 963, 1184]}' >"$T/dl-fast.json"
 http "$T/dl-fast.out" -H 'Content-Type: application/json' --data-binary @"$T/dl-fast.json" "$D/v1/meshes/$DI/feature-lines"
 expect "the next line right after it (the engine thread was freed)" 200 - POST "/v1/meshes/$DI/feature-lines" "$T/dl-fast.out"

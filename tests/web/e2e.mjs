@@ -150,6 +150,19 @@ async function run() {
   check(stats.refinedLines === 1 && stats.keyMarkers === 3, 'the updated line is drawn', JSON.stringify(stats));
 
   // ---- options -------------------------------------------------------------------------------
+  // The inputs' limits and choices come from the server's option tables (GET /v1/options).
+  const tables = await (await fetch(`${base}/v1/options`)).json();
+  const row = (name) => tables.feature_line.find((r) => r.name === name);
+  await until('the option tables to reach the form', async () => (await page.getAttribute('#opt-s-iterations', 'max')) !== null, 5000);
+  const inputs = await page.evaluate(() => ({
+    iterations: ['min', 'max', 'step'].map((a) => document.getElementById('opt-s-iterations').getAttribute(a)),
+    alpha: ['min', 'max', 'step'].map((a) => document.getElementById('opt-s-alpha').getAttribute(a)),
+    forces: [...document.getElementById('opt-s-force').options].map((o) => o.value),
+  }));
+  check(JSON.stringify(inputs.iterations) === JSON.stringify([String(row('snake.iterations').minimum), String(row('snake.iterations').maximum), '1']),
+    'the iterations input takes its limits from /v1/options', JSON.stringify(inputs.iterations));
+  check(inputs.alpha[1] === String(row('snake.alpha').maximum) && inputs.alpha[2] === 'any', 'a number input gets step "any"', JSON.stringify(inputs.alpha));
+  check(JSON.stringify(inputs.forces) === JSON.stringify(['', ...row('snake.force').enum]), 'a choice lists the table\'s names', JSON.stringify(inputs.forces));
   let n0 = s.requestCount;
   const defaultIterations = s.lastResult.stats.iterations;
   await page.fill('#opt-s-iterations', '5');

@@ -138,6 +138,11 @@ export function uploadMesh(body, { format, onProgress } = {}) {
   });
 }
 
+// Every option with its type, default, limits and description (the server's option tables).
+export async function optionTables() {
+  return (await request('/v1/options')).json();
+}
+
 export async function describeMesh(meshId) {
   return (await request(`/v1/meshes/${meshId}`)).json();
 }

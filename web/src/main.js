@@ -881,6 +881,38 @@ function readOptions() {
   return { options, problems };
 }
 
+// The inputs' limits, steps, choices and tooltips come from the server's option tables
+// (GET /v1/options), so the page never accepts what the server refuses or refuses what it
+// accepts. Until they arrive the server's own checks answer.
+function applyOptionTables(tables) {
+  const rows = new Map(tables.feature_line.map((row) => [row.name, row]));
+  for (const el of $('options-form').elements) {
+    const row = rows.get(el.name);
+    if (!row) continue;
+    const shown = typeof row.default === 'number' ? String(row.default) : JSON.stringify(row.default);
+    el.title = `${row.description} (default ${shown.replaceAll('"', '')})`;
+    if (el.type === 'number') {
+      el.min = String(row.minimum);
+      el.max = String(row.maximum);
+      el.step = row.type === 'integer' ? '1' : 'any';
+      el.title = `${row.description} (${row.minimum} to ${row.maximum}; default ${shown})`;
+    } else if (el.tagName === 'SELECT' && row.enum) {
+      const chosen = el.value;
+      while (el.options.length > 1) el.remove(1);  // the first option is "default"
+      for (const name of row.enum) el.add(new Option(name, name));
+      el.value = row.enum.includes(chosen) ? chosen : '';
+    }
+  }
+}
+
+async function loadOptionTables() {
+  try {
+    applyOptionTables(await api.optionTables());
+  } catch (e) {
+    console.warn('option tables unavailable; the server checks the options', e);
+  }
+}
+
 // The form shows `options` (undo, redo, a loaded session).
 function writeOptionsForm(options) {
   for (const el of $('options-form').elements) {
@@ -1637,6 +1669,7 @@ window.featureline = {
 };
 
 wire();
+loadOptionTables();
 renderMeshInfo();
 refresh();
 showMessage('Open a bundled sample, or drop a mesh file anywhere on the page (? for help).');

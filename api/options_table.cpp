@@ -1,0 +1,229 @@
+#include "api/options_table.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "engine/errors.h"
+
+namespace featureline {
+
+using nlohmann::json;
+
+std::string format_number(double x) {
+  std::ostringstream s;
+  s << x;
+  return s.str();
+}
+
+namespace {
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string text;
+  for (const auto& n : names) text += (text.empty() ? "" : ", ") + n;
+  return text;
+}
+
+const char* kind_name(OptionKind kind) {
+  switch (kind) {
+    case OptionKind::number: return "number";
+    case OptionKind::integer: return "integer";
+    case OptionKind::boolean: return "boolean";
+    case OptionKind::choice: break;
+  }
+  return "string";
+}
+
+// Client text quoted in an error: long values are cut, so an error never echoes megabytes.
+std::string quoted_excerpt(const std::string& text) {
+  return "\"" + (text.size() > 40 ? text.substr(0, 40) + "..." : text) + "\"";
+}
+
+}  // namespace
+
+std::string option_path(const std::string& prefix, const std::string& name) {
+  if (prefix.empty()) return name;
+  return name.empty() ? prefix : prefix + "." + name;
+}
+
+std::string dotted_to_pointer(const std::string& dotted) {
+  std::string pointer = dotted;
+  for (char& c : pointer)
+    if (c == '.') c = '/';
+  return pointer;
+}
+
+void throw_not_an_object(const std::string& where) { throw InvalidInputError("\"" + where + "\" must be a JSON object"); }
+
+void throw_unknown_option(const std::string& where) { throw InvalidInputError("unknown option \"" + where + "\""); }
+
+json check_option_value(const OptionSpec& spec, const json& value, const std::string& where) {
+  const std::string field = "\"" + where + "\"";
+  const std::string range = " from " + format_number(spec.minimum) + " to " + format_number(spec.maximum);
+  switch (spec.kind) {
+    case OptionKind::boolean:
+      if (!value.is_boolean()) throw InvalidInputError(field + " must be true or false");
+      return value;
+    case OptionKind::choice: {
+      const std::string expected = field + " must be one of " + joined(spec.choices);
+      if (!value.is_string()) throw InvalidInputError(expected);
+      const std::string name = value.get<std::string>();
+      for (const auto* names : {&spec.choices, &spec.aliases})
+        for (const auto& choice : *names)
+          if (choice == name) return value;
+      throw InvalidInputError(expected + ", not " + quoted_excerpt(name));
+    }
+    case OptionKind::integer: {
+      // JSON Schema counts 2.0 as an integer, so do we.
+      const double x = value.is_number() ? value.get<double>() : NAN;
+      if (!std::isfinite(x) || x != std::floor(x)) throw InvalidInputError(field + " must be an integer" + range);
+      if (!(x >= spec.minimum && x <= spec.maximum)) throw InvalidInputError(field + " must be an integer" + range);
+      return json(static_cast<long long>(x));
+    }
+    case OptionKind::number: break;
+  }
+  const double x = value.is_number() ? value.get<double>() : NAN;
+  if (!(x >= spec.minimum && x <= spec.maximum)) throw InvalidInputError(field + " must be a number" + range);
+  return json(x);
+}
+
+json describe_options(const std::vector<OptionSpec>& specs) {
+  json rows = json::array();
+  for (const auto& spec : specs) {
+    json row = {{"name", spec.name}, {"type", kind_name(spec.kind)}, {"default", spec.default_value}, {"description", spec.description}};
+    if (spec.kind == OptionKind::number) {
+      row["minimum"] = spec.minimum;
+      row["maximum"] = spec.maximum;
+    }
+    if (spec.kind == OptionKind::integer) {
+      row["minimum"] = static_cast<long long>(spec.minimum);
+      row["maximum"] = static_cast<long long>(spec.maximum);
+    }
+    if (spec.kind == OptionKind::choice) row["enum"] = spec.choices;
+    if (!spec.cli_flag.empty()) row["cli_flag"] = spec.cli_flag;
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// ---- the tables ----------------------------------------------------------------------------------
+// Maxima of the options that set how much work a line does (iterations, spacing, rings, the
+// shortest piece) are caps: at all of them together one line of a few hundred edges on a
+// 270k-triangle mesh stays near a second (bench/bench_worst_case prints it). The other limits
+// only keep values meaningful.
+
+const OptionTable<FeatureLineOptions>& feature_line_option_table() {
+  using O = FeatureLineOptions;
+  using I = InitialLineOptions;
+  using S = SnakeOptions;
+  static const OptionTable<O> table = {
+      option<O>("initial", {}, "How the initial line between keys is found: the paper's marching search, "
+                "a path along the strongest edges, or the shortest path", "--initial", &O::initial, &I::method),
+      option<O>("weights.alpha", {0, 1000}, "Marching weight of heading from the start key to the end key (Eq. 10)", "",
+                &O::initial, &I::marching_alpha),
+      option<O>("weights.beta", {0, 1000}, "Marching weight of keeping the previous step's direction (Eq. 10)", "",
+                &O::initial, &I::marching_beta),
+      option<O>("weights.gamma", {0, 1000}, "Marching weight of getting closer to the end key (Eq. 10)", "",
+                &O::initial, &I::marching_gamma),
+      option<O>("weights.delta", {0, 1000}, "Marching weight of the curvature term f_C (Eq. 10)", "", &O::initial,
+                &I::marching_delta),
+      option<O>("curvature_term", {}, "What the marching search's f_C compares: the current vertex, the end key, or "
+                "curvature magnitude", "--curvature-term", &O::initial, &I::marching_curvature_term),
+      option<O>("fallback", {}, "Use feature-path for a segment the marching search cannot finish", "--no-fallback",
+                &O::initial, &I::fallback),
+      option<O>("feature_weight_floor", {1e-4, 1}, "feature-path edge cost on the strongest features, relative to "
+                "featureless edges (1: geodesic)", "", &O::initial, &I::feature_weight_floor),
+      option<O>("sign_aware", {}, "Follow only ridges or only valleys when every key agrees in sign", "", &O::initial,
+                &I::sign_aware),
+      option<O>("max_line_edges", {1, 1000}, "Lines longer than this many edges are refused (split them): every "
+                "stage's work grows with the length", "", &O::initial, &I::max_edges),
+      option<O>("rings", {0, 8}, "Rings of faces around the initial line in the feature strip (0: from the line's "
+                "length, 2 to 8)", "--rings", &O::strip, &StripOptions::rings),
+      option<O>("dense_line_edges", {1, 1000}, "Automatic rings: lines of this many edges get 3 rings, twice as many 4, "
+                "four times 6, eight times 8", "", &O::strip, &StripOptions::dense_line_edges),
+      option<O>("flattening", {}, "How the strip is laid out in the plane: the paper's similar triangles, a conformal "
+                "map, or the paper's where it keeps 95% of the strip", "--flattening", &O::strip, &StripOptions::flattening),
+      option<O>("max_edge_distortion", {0.01, 100}, "Flattened triangles whose edges stretch by more than this "
+                "fraction are left out of the snake's domain", "", &O::strip, &StripOptions::max_edge_distortion),
+      option<O>("refine", {}, "Refine the initial line with the snake", "--no-refine", &O::refine),
+      option<O>("pin_interior_keys", {}, "Interior keys stay where they are placed", "--free-keys", &O::pin_interior_keys),
+      option<O>("min_piece_edges", {2, 1000}, "A strip that folds over is split in two until pieces are this short "
+                "(line edges)", "", &O::min_piece_edges),
+      option<O>("exact_crease_edges", {0, 1000}, "A piece running along at least this many crease edges only is kept "
+                "exactly on clean meshes (0: refine creases too)", "", &O::exact_crease_edges),
+      option<O>("exact_crease_noise", {0, 1}, "Mesh noise (local edge lengths) from which crease runs are re-fitted "
+                "(crease_fit) instead of kept exactly", "", &O::exact_crease_noise),
+      option<O>("crease_fit.bandwidth", {0, 20}, "Noisy crease runs: Gaussian width of the fit along the chain (local "
+                "edge lengths; 0: refine them with the snake)", "", &O::crease_fit, &CreaseFitOptions::bandwidth),
+      option<O>("crease_fit.step", {0, 1}, "Noisy crease runs: how far each vertex moves toward the fitted crease "
+                "(0: stays, 1: all the way)", "", &O::crease_fit, &CreaseFitOptions::step),
+      option<O>("crease_fit.max_shift", {0, 10}, "Noisy crease runs: a vertex the fit would move further than this "
+                "(local edge lengths) stays", "", &O::crease_fit, &CreaseFitOptions::max_shift),
+      option<O>("crease_fit.min_crease_share", {0, 1}, "Noisy meshes: a piece with at least this share of crease "
+                "edges is fitted as a crease run", "", &O::crease_fit, &CreaseFitOptions::min_crease_share),
+      option<O>("keep_initial_below", {0, 1}, "A refined piece weaker on the feature than this share of its initial "
+                "line keeps the initial line (0: always the snake's)", "", &O::keep_initial_below),
+      option<O>("snake.alpha", {0, 1000}, "Elasticity: resistance to stretching (Eq. 12)", "--alpha", &O::snake, &S::alpha),
+      option<O>("snake.beta", {0, 1000}, "Rigidity: resistance to bending (Eq. 12)", "--beta", &O::snake, &S::beta),
+      option<O>("snake.tau", {1e-4, 1000}, "Time step of the semi-implicit iteration (Eq. 15)", "--tau", &O::snake, &S::tau),
+      option<O>("snake.kappa", {0, 1}, "Weight of the feature force", "--kappa", &O::snake, &S::kappa),
+      option<O>("snake.exponent", {0.1, 4}, "p in the feature potential |C|^p (the paper: 2)", "", &O::snake, &S::exponent),
+      option<O>("snake.curvature_cap", {0.01, 1000}, "|C| is clamped at this many curvature-scale units", "", &O::snake,
+                &S::curvature_cap),
+      option<O>("snake.max_step", {1e-3, 1}, "Largest move of a point in one iteration (edge lengths)", "", &O::snake,
+                &S::max_step),
+      option<O>("snake.iterations", {0, 500}, "Iteration cap per piece", "--iterations", &O::snake, &S::max_iterations),
+      option<O>("snake.tolerance", {0, 10}, "Stop when the line's shape changes less than this per iteration (edge "
+                "lengths)", "", &O::snake, &S::tolerance),
+      option<O>("snake.spacing", {0.25, 10}, "Distance between snake points (edge lengths)", "--spacing", &O::snake,
+                &S::spacing),
+      option<O>("snake.resample_every", {1, 1000}, "Iterations between resampling passes", "", &O::snake,
+                &S::resample_every),
+      option<O>("snake.force", {}, "Feature force: the paper's per-triangle gradient, or smooth vertex gradients",
+                "--force", &O::snake, &S::force),
+      option<O>("snake.normal_force_only", {}, "Paper step only: keep only the force's component normal to the line", "",
+                &O::snake, &S::normal_force_only),
+      option<O>("snake.sharp_crest_drop", {0, 0.99}, "Smooth force: the drop in |C|^p on both sides that makes a vertex "
+                "a sharp crest (0: off)", "", &O::snake, &S::sharp_crest_drop),
+      option<O>("snake.feature_sign", {-1, 1}, "Attract to ridges (positive), valleys (negative), or as the keys' "
+                "sign says (0)", "", &O::snake, &S::feature_sign),
+      option<O>("snake.normal_step", {}, "Move points along their normals with the force linearised (false: the "
+                "paper's step)", "", &O::snake, &S::normal_step),
+  };
+  return table;
+}
+
+const OptionTable<SegmentationOptions>& segmentation_option_table() {
+  using O = SegmentationOptions;
+  static const OptionTable<O> table = {
+      option<O>("mode", {}, "snap: cut along mesh edges nearest the lines; remesh: split faces so parts meet on the "
+                "smooth line", "--mode", &O::mode),
+      option<O>("min_segment_area_fraction", {0, 0.5}, "Parts below this share of the area are reported (or merged)",
+                "--min-segment-area", &O::min_segment_area_fraction),
+      option<O>("merge_tiny_segments", {}, "Merge parts below min_segment_area_fraction into the neighbour sharing "
+                "most of their cut", "--merge-tiny-segments", &O::merge_tiny_segments),
+      option<O>("attach_distance", {0, 20}, "A loose line end this close (edge lengths) to the boundary or another "
+                "line is joined to it (0: off)", "--attach-distance", &O::attach_distance),
+      option<O>("remesh_snap", {0, 0.2}, "remesh: crossings this close (fraction of an edge) to a vertex or edge "
+                "move onto it", "--remesh-snap", &O::remesh_snap),
+  };
+  return table;
+}
+
+const OptionTable<CurvatureOptions>& curvature_option_table() {
+  using O = CurvatureOptions;
+  static const OptionTable<O> table = {
+      option<O>("method", {}, "jet: principal curvatures of a fit over a radius that follows the noise; cotangent: "
+                "the paper's one-ring mean curvature", "--curvature", &O::method),
+      option<O>("radius", {0, CurvatureLimits::max_radius}, "Jet radius in local edge lengths (0: from the noise)",
+                "--curvature-radius", &O::radius),
+      option<O>("smoothing_passes", {-1, CurvatureLimits::max_smoothing_passes}, "Laplacian passes over the "
+                "curvature field (-1: while they cut its roughness)", "--smooth-curvature", &O::smoothing_passes),
+      option<O>("crease_angle", {-1, CurvatureLimits::max_crease_angle}, "Dihedral angle in degrees above which an "
+                "edge is a crease (0: from the noise, -1: no creases)", "--crease-angle", &O::crease_angle),
+      option<O>("smoothing_tolerance", {0.01, 0.99}, "Automatic smoothing goes on while a run of passes leaves at "
+                "most this share of the field's roughness", "", &O::smoothing_tolerance),
+  };
+  return table;
+}
+
+}  // namespace featureline

@@ -1,0 +1,210 @@
+// One table per options struct: each row names a JSON field, the struct member behind it, its
+// type, default, limits (or accepted names) and what it does. The same rows drive JSON parsing
+// (with exact errors), JSON output of the effective options, range checks of options built in
+// code, the CLI's flags and help, and the description served at GET /v1/options that the page
+// builds its inputs from; tests check api/openapi.yaml against them. Limits are where cost is
+// capped: a row's maximum is what one request may ask for (bench/bench_worst_case measures a
+// line at the caps).
+#pragma once
+
+#include <functional>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "engine/curvature.h"
+#include "engine/enum_names.h"
+#include "engine/feature_line.h"
+#include "engine/segmentation.h"
+
+namespace featureline {
+
+template <>
+struct EnumNames<SegmentationMode> {
+  static constexpr std::array<std::pair<SegmentationMode, const char*>, 2> entries{{{SegmentationMode::snap, "snap"},
+                                                                                   {SegmentationMode::remesh, "remesh"}}};
+};
+
+enum class OptionKind { number, integer, boolean, choice };
+
+/// What one option accepts, as the API describes it.
+struct OptionSpec {
+  std::string name;  ///< JSON path below the options object, parts joined by '.' ("snake.iterations")
+  OptionKind kind = OptionKind::number;
+  double minimum = 0, maximum = 0;   ///< number and integer
+  std::vector<std::string> choices;  ///< choice: the accepted names
+  std::vector<std::string> aliases;  ///< choice: older names still accepted, never printed
+  nlohmann::json default_value;      ///< the struct's default, as JSON
+  std::string description;           ///< one line
+  /// The CLI flag setting it, "" for none. A boolean flag sets the opposite of the default.
+  std::string cli_flag;
+};
+
+template <typename Options>
+struct OptionField {
+  OptionSpec spec;
+  std::function<nlohmann::json(const Options&)> read;
+  std::function<void(Options&, const nlohmann::json&)> write;  ///< the value already passed check_option_value
+};
+
+template <typename Options>
+using OptionTable = std::vector<OptionField<Options>>;
+
+/// FeatureLineOptions with its nested initial-line, strip and snake options (a request's "options").
+const OptionTable<FeatureLineOptions>& feature_line_option_table();
+/// SegmentationOptions (the fields of a segmentation request beside "lines").
+const OptionTable<SegmentationOptions>& segmentation_option_table();
+/// CurvatureOptions: how a mesh is prepared (CLI flags; uploads use the defaults).
+const OptionTable<CurvatureOptions>& curvature_option_table();
+
+/// Limits of a request's shape rather than of one option, served beside the tables.
+struct RequestLimits {
+  static constexpr std::size_t max_lines = 64;          ///< lines per feature-line or segmentation request
+  static constexpr std::size_t max_keys_per_line = 128;
+  static constexpr std::size_t max_json_bytes = 4 << 20;
+};
+
+/// `value` checked against `spec` (type, range, accepted names), normalised (2.0 -> 2 for
+/// integers). \throw InvalidInputError "\"<where>\" must be an integer from 1 to 2000" and the like.
+nlohmann::json check_option_value(const OptionSpec& spec, const nlohmann::json& value, const std::string& where);
+
+/// A limit or default as errors and help print it: 0.0001, 500, 1e+06.
+std::string format_number(double x);
+
+/// "prefix.name", or "name" when the prefix is empty.
+std::string option_path(const std::string& prefix, const std::string& name);
+/// "snake.iterations" -> "snake/iterations" (a JSON pointer without its leading '/').
+std::string dotted_to_pointer(const std::string& dotted);
+[[noreturn]] void throw_not_an_object(const std::string& where);
+[[noreturn]] void throw_unknown_option(const std::string& where);
+
+/// The table as the API describes it: [{"name", "type", "default", "minimum", "maximum" | "enum",
+/// "description"}] (JSON Schema's words, so it compares directly with api/openapi.yaml).
+nlohmann::json describe_options(const std::vector<OptionSpec>& specs);
+
+template <typename Options>
+std::vector<OptionSpec> option_specs(const OptionTable<Options>& table) {
+  std::vector<OptionSpec> specs;
+  for (const auto& field : table) specs.push_back(field.spec);
+  return specs;
+}
+
+/// Applies a JSON object onto `options`. Nested objects follow the dotted names; unknown fields,
+/// wrong types and values out of range are an InvalidInputError naming the field by its path
+/// below `prefix` (e.g. "options.snake.iterations").
+template <typename Options>
+void apply_options(const OptionTable<Options>& table, const nlohmann::json& object, const std::string& prefix, Options& options);
+
+/// Every option's current value, as the nested JSON object apply_options reads.
+template <typename Options>
+nlohmann::json options_json(const OptionTable<Options>& table, const Options& options) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& field : table) out[nlohmann::json::json_pointer("/" + dotted_to_pointer(field.spec.name))] = field.read(options);
+  return out;
+}
+
+/// Checks options built in code (the CLI, benchmarks) against the same limits as JSON input.
+template <typename Options>
+void check_options(const OptionTable<Options>& table, const Options& options, const std::string& prefix) {
+  for (const auto& field : table) check_option_value(field.spec, field.read(options), option_path(prefix, field.spec.name));
+}
+
+// ---- building rows -------------------------------------------------------------------------------
+
+template <typename Object, typename Member>
+Member& member_at(Object& object, Member Object::*member) {
+  return object.*member;
+}
+template <typename Object, typename Member, typename... Rest>
+auto& member_at(Object& object, Member Object::*member, Rest... rest) {
+  return member_at(object.*member, rest...);
+}
+
+template <typename Value>
+nlohmann::json option_to_json(const Value& value) {
+  if constexpr (std::is_enum_v<Value>) return to_string(value);
+  else return value;
+}
+template <typename Value>
+void option_from_json(Value& out, const nlohmann::json& value) {
+  if constexpr (std::is_enum_v<Value>) out = *parse_enum<Value>(value.get<std::string>());
+  else out = value.get<Value>();
+}
+
+template <typename Value>
+OptionKind option_kind() {
+  if constexpr (std::is_same_v<Value, bool>) return OptionKind::boolean;
+  else if constexpr (std::is_enum_v<Value>) return OptionKind::choice;
+  else if constexpr (std::is_integral_v<Value>) return OptionKind::integer;
+  else return OptionKind::number;
+}
+
+/// The names of an enum's values (`primary`), or its accepted aliases (!primary).
+template <typename Enum>
+std::vector<std::string> enum_choices(bool primary = true) {
+  std::vector<std::string> names;
+  const auto& entries = EnumNames<Enum>::entries;
+  for (std::size_t i = 0; i < entries.size(); ++i)
+    if (is_primary_enum_name<Enum>(i) == primary) names.push_back(entries[i].second);
+  return names;
+}
+
+struct OptionRange {
+  double minimum = 0, maximum = 0;  ///< unused for booleans and choices
+};
+
+/// A row for the member reached from Options through `path` (one member pointer per level).
+template <typename Options, typename... Path>
+OptionField<Options> option(const char* name, OptionRange range, const char* description, const char* cli_flag, Path... path) {
+  using Value = std::decay_t<decltype(member_at(std::declval<Options&>(), path...))>;
+  OptionField<Options> field;
+  field.spec.name = name;
+  field.spec.kind = option_kind<Value>();
+  field.spec.minimum = range.minimum;
+  field.spec.maximum = range.maximum;
+  if constexpr (std::is_enum_v<Value>) {
+    field.spec.choices = enum_choices<Value>();
+    field.spec.aliases = enum_choices<Value>(false);
+  }
+  field.spec.description = description;
+  field.spec.cli_flag = cli_flag;
+  field.read = [path...](const Options& o) { return option_to_json(member_at(const_cast<Options&>(o), path...)); };
+  field.write = [path...](Options& o, const nlohmann::json& value) { option_from_json(member_at(o, path...), value); };
+  field.spec.default_value = field.read(Options{});
+  return field;
+}
+
+// ---- parsing -------------------------------------------------------------------------------------
+/// The row named `name`, null when none; `is_group` tells whether rows exist below "name.".
+template <typename Options>
+const OptionField<Options>* find_option(const OptionTable<Options>& table, const std::string& name, bool& is_group) {
+  is_group = false;
+  for (const auto& field : table) {
+    if (field.spec.name == name) return &field;
+    if (field.spec.name.compare(0, name.size() + 1, name + ".") == 0) is_group = true;
+  }
+  return nullptr;
+}
+
+template <typename Options>
+void apply_options_below(const OptionTable<Options>& table, const nlohmann::json& object, const std::string& group,
+                         const std::string& prefix, Options& options) {
+  if (!object.is_object()) throw_not_an_object(option_path(prefix, group));
+  for (auto it = object.begin(); it != object.end(); ++it) {
+    const std::string name = group.empty() ? it.key() : group + "." + it.key();
+    bool is_group = false;
+    const OptionField<Options>* field = find_option(table, name, is_group);
+    if (field != nullptr) field->write(options, check_option_value(field->spec, it.value(), option_path(prefix, name)));
+    else if (is_group) apply_options_below(table, it.value(), name, prefix, options);
+    else throw_unknown_option(option_path(prefix, name));
+  }
+}
+
+template <typename Options>
+void apply_options(const OptionTable<Options>& table, const nlohmann::json& object, const std::string& prefix, Options& options) {
+  apply_options_below(table, object, "", prefix, options);
+}
+
+}  // namespace featureline

@@ -1,0 +1,106 @@
+#include "api/requests.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "api/feature_line_json.h"
+#include "api/options_table.h"
+#include "engine/errors.h"
+
+namespace featureline {
+
+using nlohmann::json;
+
+namespace {
+
+// A key given as a point: the nearest vertex used by a face (a scan over every vertex, about a
+// millisecond per million vertices).
+std::uint32_t nearest_vertex(const PreparedMesh& mesh, const Eigen::Vector3d& p) {
+  std::uint32_t best = 0;
+  double best_d = HUGE_VAL;
+  for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
+    if (mesh.component[v] < 0) continue;
+    const double d = (mesh.positions[v] - p).squaredNorm();
+    if (d < best_d) best_d = d, best = v;
+  }
+  return best;
+}
+
+bool is_point_key(const json& k) {
+  if (!k.is_object() || k.size() != 1 || !k.contains("point")) return false;
+  const json& p = k["point"];
+  return p.is_array() && p.size() == 3 && p[0].is_number() && p[1].is_number() && p[2].is_number();
+}
+
+std::uint32_t parse_key(const json& k, const PreparedMesh& mesh, const std::string& at) {
+  if (k.is_number_unsigned()) {
+    const auto id = k.get<std::uint64_t>();
+    if (id >= mesh.n_vertices())
+      throw InvalidInputError(at + " is vertex " + std::to_string(id) + ", but the mesh has only " +
+                              std::to_string(mesh.n_vertices()) + " vertices");
+    return std::uint32_t(id);
+  }
+  if (!is_point_key(k)) throw InvalidInputError(at + " must be a vertex id (integer >= 0) or {\"point\": [x, y, z]}");
+  const json& p = k["point"];
+  const Eigen::Vector3d point(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
+  if (!point.allFinite()) throw InvalidInputError(at + ".point must be finite");
+  return nearest_vertex(mesh, point);
+}
+
+}  // namespace
+
+FeatureLineRequest parse_line_request(const json& j, const PreparedMesh& mesh, const std::string& where) {
+  if (!j.is_object()) throw InvalidInputError(where + " must be a JSON object");
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (it.key() != "keys" && it.key() != "closed" && it.key() != "options")
+      throw InvalidInputError("unknown field \"" + where + "." + it.key() + "\"");
+  FeatureLineRequest line;
+  const auto keys = j.find("keys");
+  if (keys == j.end() || !keys->is_array()) throw InvalidInputError(where + ".keys must be an array of vertex ids or points");
+  if (keys->size() > RequestLimits::max_keys_per_line)
+    throw InvalidInputError(where + ".keys has more than " + std::to_string(RequestLimits::max_keys_per_line) + " keys");
+  for (std::size_t i = 0; i < keys->size(); ++i)
+    line.keys.push_back(parse_key((*keys)[i], mesh, where + ".keys[" + std::to_string(i) + "]"));
+  if (const auto closed = j.find("closed"); closed != j.end()) {
+    if (!closed->is_boolean()) throw InvalidInputError(where + ".closed must be true or false");
+    line.closed = closed->get<bool>();
+  }
+  if (const auto options = j.find("options"); options != j.end()) apply_options_json(*options, line.options);
+  return line;
+}
+
+std::vector<FeatureLineRequest> parse_line_list(const json& list, const PreparedMesh& mesh) {
+  if (!list.is_array() || list.empty() || list.size() > RequestLimits::max_lines)
+    throw InvalidInputError("\"lines\" must be an array of 1 to " + std::to_string(RequestLimits::max_lines) + " line requests");
+  std::vector<FeatureLineRequest> lines;
+  for (std::size_t i = 0; i < list.size(); ++i) lines.push_back(parse_line_request(list[i], mesh, "lines[" + std::to_string(i) + "]"));
+  return lines;
+}
+
+std::vector<FeatureLineRequest> parse_feature_line_body(const json& body, const PreparedMesh& mesh, bool& batch) {
+  batch = body.is_object() && body.contains("lines");
+  if (!batch) return {parse_line_request(body, mesh, "request")};
+  if (body.size() != 1) throw InvalidInputError("with \"lines\", no other top-level field is allowed");
+  return parse_line_list(body["lines"], mesh);
+}
+
+SegmentationOptions parse_segmentation_options(const json& body, const std::vector<std::string>& line_fields) {
+  if (!body.is_object()) throw InvalidInputError("the request body must be a JSON object");
+  json options = body;
+  for (const auto& field : line_fields) options.erase(field);
+  SegmentationOptions parsed;
+  apply_options(segmentation_option_table(), options, "", parsed);
+  return parsed;
+}
+
+json describe_api_options() {
+  return {{"feature_line", describe_options(option_specs(feature_line_option_table()))},
+          {"segmentation", describe_options(option_specs(segmentation_option_table()))},
+          {"curvature", describe_options(option_specs(curvature_option_table()))},
+          {"limits",
+           {{"max_lines", RequestLimits::max_lines},
+            {"max_keys_per_line", RequestLimits::max_keys_per_line},
+            {"max_json_bytes", RequestLimits::max_json_bytes}}}};
+}
+
+}  // namespace featureline

@@ -1,0 +1,35 @@
+// Request bodies of the HTTP API mapped to engine requests: feature lines (one or a batch) and
+// segmentation. Every field is checked here, with errors naming it (InvalidInputError, which
+// server/http_errors answers as 400 invalid_request); the server only routes and transports.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "engine/feature_line.h"
+#include "engine/prepared_mesh.h"
+#include "engine/segmentation.h"
+
+namespace featureline {
+
+/// One line: {"keys": [vertex id | {"point": [x, y, z]}, ...], "closed", "options"}. A point key
+/// becomes the nearest vertex. `where` names the line in errors ("request", "lines[2]").
+FeatureLineRequest parse_line_request(const nlohmann::json& line, const PreparedMesh& mesh, const std::string& where);
+
+/// "lines": an array of 1 to RequestLimits::max_lines line requests.
+std::vector<FeatureLineRequest> parse_line_list(const nlohmann::json& lines, const PreparedMesh& mesh);
+
+/// The body of POST /feature-lines: one line, or {"lines": [...]} alone (`batch` set).
+std::vector<FeatureLineRequest> parse_feature_line_body(const nlohmann::json& body, const PreparedMesh& mesh, bool& batch);
+
+/// The segmentation options of a segmentation request: every top-level field except
+/// `line_fields` (the fields that say which lines to cut along), by segmentation_option_table().
+SegmentationOptions parse_segmentation_options(const nlohmann::json& body,
+                                               const std::vector<std::string>& line_fields = {"lines"});
+
+/// GET /v1/options: every option table as describe_options() rows, with the request limits.
+nlohmann::json describe_api_options();
+
+}  // namespace featureline
