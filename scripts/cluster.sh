@@ -102,19 +102,9 @@ start_replica() {
 }
 
 render_nginx_conf() {
-  local by_mesh="" any="" i
-  for ((i = 1; i <= replicas; i++)); do
-    by_mesh+="    server 127.0.0.1:$(replica_port "$i") max_fails=1 fail_timeout=10s;"$'\n'
-    any+="    server 127.0.0.1:$(replica_port "$i") max_fails=1 fail_timeout=10s;"$'\n'
-  done
-  local user="# user (not root: nginx keeps this user)"
-  [ "$(id -u)" = 0 ] && user="user root root;"
-  awk -v state="$state" -v port="$port" -v mb="$max_upload_mb" -v user="$user" \
-      -v by_mesh="${by_mesh%$'\n'}" -v any="${any%$'\n'}" '
-    { gsub(/@STATE@/, state); gsub(/@PORT@/, port); gsub(/@MAX_UPLOAD_MB@/, mb); gsub(/@USER@/, user) }
-    /^@REPLICAS_BY_MESH@$/ { print by_mesh; next }
-    /^@REPLICAS_ANY@$/ { print any; next }
-    { print }' "$root/deploy/nginx.conf.template" >"$state/nginx.conf"
+  local servers=() i
+  for ((i = 1; i <= replicas; i++)); do servers+=("127.0.0.1:$(replica_port "$i")"); done
+  "$root/deploy/render-nginx-conf.sh" "$state" "127.0.0.1:$port" "$max_upload_mb" "${servers[@]}" >"$state/nginx.conf"
 }
 
 start_nginx() {
