@@ -95,8 +95,10 @@ start_replica() {
   port_free "$p" || die "port $p (replica $i) is taken"
   [ -x "$server_bin" ] || die "no server at $server_bin (build it: scripts/setup.sh)"
   # setsid: the replica outlives this script and its terminal; its pid is recorded for down.
+  # nginx holds the clients and opens a connection per request in flight: each replica takes up
+  # to 512 of them (256 workers) and still refuses engine work beyond its queue with 503.
   setsid "$server_bin" --host 127.0.0.1 --port "$p" --store "redis://127.0.0.1:$redis_port" \
-    --web-root "$root/web/dist" --max-upload-mb "$max_upload_mb" "${server_flags[@]}" \
+    --web-root "$root/web/dist" --max-upload-mb "$max_upload_mb" --http-threads 256 "${server_flags[@]}" \
     </dev/null >"$state/logs/replica-$i.out" 2>>"$state/logs/replica-$i.log" &
   echo $! >"$state/pids/replica-$i.pid"
 }

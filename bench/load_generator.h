@@ -1,0 +1,35 @@
+// The benchmarks' HTTP load generator: N client threads, each on one keep-alive connection,
+// POSTing JSON bodies in turn for a fixed time; latencies of 200 answers, everything else an
+// error. Shared by bench_server (in-process server) and bench_cluster (nginx vs one replica).
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace featureline::bench {
+
+struct LoadTarget {
+  std::string host = "127.0.0.1";
+  int port = 0;
+  std::vector<std::string> paths;   ///< client i starts at paths[i % size] and cycles with its bodies
+  std::vector<std::string> bodies;  ///< JSON bodies, cycled
+};
+
+struct LoadLevel {
+  int connections = 0;
+  double lines_per_s = 0, p50_ms = 0, p99_ms = 0, max_ms = 0;
+  std::size_t errors = 0;  ///< answers other than 200 and failed connections
+};
+
+/// Runs `connections` clients for `seconds` after each sent one warm-up request (connection
+/// setup is not steady-state latency).
+LoadLevel run_load(const LoadTarget& target, int connections, double seconds);
+
+double percentile(std::vector<double> values, double q);
+
+/// One table row, and its header: connections, lines/s, p50_ms, p99_ms, max_ms, errors.
+void print_load_header(const char* first_column = "connections");
+void print_load_level(const LoadLevel& level, const std::string& label = "");
+
+}  // namespace featureline::bench
