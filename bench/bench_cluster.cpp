@@ -14,19 +14,10 @@
 
 #include <csignal>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <sstream>
 
 namespace {
-
-std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("missing benchmark mesh " + path);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 std::vector<int> parse_levels(const std::string& text) {
   std::vector<int> levels;
@@ -56,7 +47,7 @@ int main(int argc, char** argv) {
   // A server may close a refused connection while a client still writes: an error, not a signal.
   std::signal(SIGPIPE, SIG_IGN);
   try {
-    const std::string bunny = read_file(std::string(FEATURELINE_SHARED_DIR) + "/data/meshes/bunny_closed.off");
+    const std::string bunny = featureline::bench::read_file(std::string(FEATURELINE_SHARED_DIR) + "/data/meshes/bunny_closed.off");
     httplib::Client setup("127.0.0.1", front);
     setup.set_read_timeout(60, 0);
     std::vector<std::string> paths;

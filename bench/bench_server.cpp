@@ -28,13 +28,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("missing benchmark mesh " + path);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 // Resident memory of this process (server and clients share it), from /proc/self/statm.
 double resident_mib() {
@@ -66,7 +59,7 @@ int main(int argc, char** argv) {
     std::thread serving([&] { server.run(); });
 
     // Upload-to-ready of igea: the whole POST (transfer, parse, prepare), median of 3.
-    const std::string igea = read_file(meshes + "igea.ply");
+    const std::string igea = featureline::bench::read_file(meshes + "igea.ply");
     std::vector<double> upload_ms;
     for (int i = 0; i < 3; ++i) {
       httplib::Client client("127.0.0.1", port);
@@ -101,7 +94,7 @@ int main(int argc, char** argv) {
     }
 
     // Lines on the bunny: keys picked along features, the same set for every concurrency.
-    const std::string bunny = read_file(meshes + "bunny_closed.off");
+    const std::string bunny = featureline::bench::read_file(meshes + "bunny_closed.off");
     httplib::Client setup("127.0.0.1", port);
     auto res = setup.Post("/v1/meshes?format=off", bunny, "application/octet-stream");
     if (!res || res->status != 201) throw std::runtime_error("bunny upload failed");

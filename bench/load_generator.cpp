@@ -6,6 +6,9 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
 #include <thread>
 
 namespace featureline::bench {
@@ -16,6 +19,14 @@ double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
   return v[std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5))];
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("missing benchmark mesh " + path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
 }
 
 LoadLevel run_load(const LoadTarget& target, int connections, double seconds) {

@@ -28,6 +28,9 @@ LoadLevel run_load(const LoadTarget& target, int connections, double seconds);
 
 double percentile(std::vector<double> values, double q);
 
+/// A benchmark input file's bytes. \throw std::runtime_error naming the missing file
+std::string read_file(const std::string& path);
+
 /// One table row, and its header: connections, lines/s, p50_ms, p99_ms, max_ms, errors.
 void print_load_header(const char* first_column = "connections");
 void print_load_level(const LoadLevel& level, const std::string& label = "");

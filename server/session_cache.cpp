@@ -166,7 +166,11 @@ DurableSessions::Found DurableSessions::find(const std::string& id) {
   SessionCache::Miss miss = SessionCache::Miss::unknown;
   found.session = cache_.find(id, &miss);
   if (found.session) {
-    touch_if_due(id);
+    if (still_stored(id)) return found;
+    // Deleted or expired in the store by another replica: the cached copy goes too.
+    cache_.erase(id);
+    found.session = nullptr;
+    found.why = why_gone(id, store_->get(id).why);
     return found;
   }
   if (!store_) {
@@ -221,26 +225,29 @@ DurableSessions::Found DurableSessions::load_from_store(const std::string& id) {
   ++rebuilds_;
   found.session = *cached;
   found.rebuilt = true;
-  touch_if_due(id);
+  still_stored(id);  // restarts the store's idle clock
   return found;
 }
 
-void DurableSessions::touch_if_due(const std::string& id) {
-  if (!store_) return;
+// Restarts the store's idle clock when due (every use for a shared store); false only when
+// the store says the upload is gone.
+bool DurableSessions::still_stored(const std::string& id) {
+  if (!store_) return true;
   const auto now = SessionCache::Clock::now();
-  {
+  if (!store_->shared()) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (touched_.size() > 100000) touched_.clear();  // bounded: forgetting only costs an early touch
     auto& last = touched_[id];
-    if (last != SessionCache::Clock::time_point{} && now - last < options_.touch_interval) return;
+    if (last != SessionCache::Clock::time_point{} && now - last < options_.touch_interval) return true;
     last = now;
   }
   try {
-    store_->touch(id);
+    return store_->touch(id);
   } catch (const StoreUnavailableError&) {
-    // The session is in memory and answers; the next request tries the touch again.
+    // The session is in memory and answers; the next use tries again.
     std::lock_guard<std::mutex> lock(mutex_);
     touched_.erase(id);
+    return true;
   }
 }
 

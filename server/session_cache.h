@@ -106,8 +106,9 @@ class DurableSessions {
   using Rebuild = std::function<MeshSession(std::shared_ptr<const StoredUpload>)>;
 
   struct Options {
-    /// The store's idle clock is restarted at most this often per session (a store round trip per
-    /// request would cost more than a line); the store keeps uploads this much longer than the cache.
+    /// The store's idle clock is restarted at most this often per session; the store keeps
+    /// uploads this much longer than the cache. A shared store (Redis) is asked on every use
+    /// instead: another replica may have deleted the upload, and a cached copy must not outlive it.
     std::chrono::seconds touch_interval{60};
   };
 
@@ -146,7 +147,7 @@ class DurableSessions {
   Found rebuild_once(const std::string& id);
   Found load_from_store(const std::string& id);
   Gone why_gone(const std::string& id, StoreMiss store_miss);
-  void touch_if_due(const std::string& id);
+  bool still_stored(const std::string& id);
 
   SessionCache& cache_;
   std::unique_ptr<UploadStore> store_;

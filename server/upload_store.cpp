@@ -161,10 +161,7 @@ class DirectoryStore final : public UploadStore {
     return found;
   }
 
-  void touch(const std::string& id) override {
-    if (!is_mesh_id(id)) return;
-    set_mtime(upload_path(id), options_.now());
-  }
+  bool touch(const std::string& id) override { return is_mesh_id(id) && set_mtime(upload_path(id), options_.now()); }
 
   bool erase(const std::string& id) override {
     if (!is_mesh_id(id)) return false;
@@ -192,6 +189,7 @@ class DirectoryStore final : public UploadStore {
     return bytes_;
   }
 
+  bool shared() const override { return false; }  // one server per folder
   std::string describe() const override { return "directory " + root_; }
 
  private:
@@ -245,12 +243,14 @@ class DirectoryStore final : public UploadStore {
     if (rc != 0) throw_write_error("fsync", path);
   }
 
-  static void set_mtime(const std::string& path, SystemClock::time_point when) {
+  // False when the file does not exist.
+  static bool set_mtime(const std::string& path, SystemClock::time_point when) {
     const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(when.time_since_epoch()).count();
     const timespec t{time_t(ns / 1000000000), long(ns % 1000000000)};
     const timespec times[2] = {t, t};
-    if (utimensat(AT_FDCWD, path.c_str(), times, 0) != 0 && errno != ENOENT)
-      throw StoreUnavailableError("the upload store failed: " + errno_text("utimensat", path));
+    if (utimensat(AT_FDCWD, path.c_str(), times, 0) == 0) return true;
+    if (errno == ENOENT) return false;
+    throw StoreUnavailableError("the upload store failed: " + errno_text("utimensat", path));
   }
 
   static bool older_than(const std::string& path, SystemClock::time_point limit) {

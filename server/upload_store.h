@@ -58,8 +58,9 @@ class UploadStore {
   virtual void put(const std::string& id, const StoredUpload& upload) = 0;
   /// The upload, or why there is none. \throw StoreUnavailableError
   virtual StoreLookup get(const std::string& id) = 0;
-  /// Restarts `id`'s idle clock (a no-op when absent). \throw StoreUnavailableError
-  virtual void touch(const std::string& id) = 0;
+  /// Restarts `id`'s idle clock; false when `id` is not stored (deleted or expired, perhaps by
+  /// another process sharing the store). \throw StoreUnavailableError
+  virtual bool touch(const std::string& id) = 0;
   /// Removes `id`, remembering it as deleted; false when it was not stored. \throw StoreUnavailableError
   virtual bool erase(const std::string& id) = 0;
   /// Removes uploads idle longer than the time-to-live (remembered as expired) and forgets old
@@ -67,6 +68,9 @@ class UploadStore {
   virtual std::size_t expire_idle() = 0;
   /// Bytes of uploads held (the directory's own count; Redis: 0, its limit is its maxmemory).
   virtual std::size_t bytes() const = 0;
+  /// True when other processes use the same store (Redis: a cluster's replicas), so an upload
+  /// may be deleted or expire behind this process' back.
+  virtual bool shared() const = 0;
   /// "directory PATH" or "redis HOST:PORT/DB", for the banner and errors.
   virtual std::string describe() const = 0;
 };

@@ -89,10 +89,12 @@ class RedisStore final : public UploadStore {
     return found;
   }
 
-  void touch(const std::string& id) override {
-    if (!is_mesh_id(id)) return;
-    run({{"EXPIRE", upload_key(id), std::to_string(options_.idle_ttl.count())},
-         {"EXPIRE", known_key(id), std::to_string((options_.idle_ttl + options_.tombstone_ttl).count())}});
+  bool touch(const std::string& id) override {
+    if (!is_mesh_id(id)) return false;
+    auto replies = run({{"EXPIRE", upload_key(id), std::to_string(options_.idle_ttl.count())},
+                        {"EXPIRE", known_key(id), std::to_string((options_.idle_ttl + options_.tombstone_ttl).count())}});
+    if (replies[0]->type != REDIS_REPLY_INTEGER) throw StoreUnavailableError("the upload store (" + describe() + ") failed: " + text(replies[0].get()));
+    return replies[0]->integer == 1;
   }
 
   bool erase(const std::string& id) override {
@@ -107,6 +109,7 @@ class RedisStore final : public UploadStore {
 
   std::size_t expire_idle() override { return 0; }  // Redis expires the keys itself
   std::size_t bytes() const override { return 0; }
+  bool shared() const override { return true; }
   std::string describe() const override {
     return "redis " + address_.host + ":" + std::to_string(address_.port) + "/" + std::to_string(address_.db);
   }

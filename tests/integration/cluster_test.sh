@@ -135,16 +135,31 @@ cluster status >"$T/status2" 2>&1
 check_eq "status exits 1 with a replica down" "$?" 1
 check_eq "status shows the dead replica without a pid" "$(awk -v r="$victim" '$1 == "replica" && $2 == r { print $3 }' "$T/status2")" "-"
 
+# ---- the dead replica comes back; a delete reaches the replica that rebuilt the mesh meanwhile ------
+cluster up --replicas 3 -- --quiet --threads 1 >"$T/up_again.out" 2>&1
+check_eq "up brings the dead replica back (status exit 0)" "$(cluster status >/dev/null 2>&1; echo $?)" 0
+cluster status >"$T/status2b" 2>&1
+http "$T/del0.json" -X DELETE "$FRONT/v1/meshes/${IDS[0]}"
+check_eq "DELETE of the moved mesh through nginx: 204" "$STATUS" 204
+for port in $(seq $((CLUSTER_PORT + 2)) $((CLUSTER_PORT + 4))); do
+  http "$T/gone0_$port.json" "http://127.0.0.1:$port/v1/meshes/${IDS[0]}"
+  check "replica on $port (cached or not): 404 'was deleted' for the moved mesh" grep -q "was deleted" "$T/gone0_$port.json"
+done
+DELETED=(0)
+
 # ---- restart the whole cluster -------------------------------------------------------------------
 cluster down >"$T/down1.out" 2>&1
 check_eq "cluster down exits 0" "$?" 0
 alive=0; for pid in "${PIDS1[@]}"; do kill -0 "$pid" 2>/dev/null && alive=$((alive + 1)); done
+mapfile -t PIDS1B < <(status_pids "$T/status2b")
+for pid in "${PIDS1B[@]}"; do kill -0 "$pid" 2>/dev/null && alive=$((alive + 1)); done
 check_eq "down: no process of the first start left" "$alive" 0
 cluster up --replicas 3 -- --quiet --threads 1 >"$T/up2.out" 2>&1
 check_eq "cluster up again exits 0" "$?" 0
 cluster status >"$T/status3" 2>&1
 mapfile -t PIDS2 < <(status_pids "$T/status3")
 for i in "${!IDS[@]}"; do
+  [ "$i" = "${DELETED[0]}" ] && continue
   line_of "$i"
   check_eq "after the restart, mesh $i answers 200" "$LINE_STATUS" 200
   check_eq "after the restart, mesh $i's line is identical" "$LINE" "${LINES[$i]}"
@@ -163,8 +178,8 @@ for port in $(seq $((CLUSTER_PORT + 2)) $((CLUSTER_PORT + 4))); do
 done
 http "$T/unknown.json" "$FRONT/v1/meshes/0123456789abcdef0123456789abcdef"
 check "an id never issued: 404 that says so (not deleted)" grep -q "no mesh with id" "$T/unknown.json"
-line_of 0
-check_eq "the other sessions still answer" "$LINE" "${LINES[0]}"
+line_of 2
+check_eq "the other sessions still answer" "$LINE" "${LINES[2]}"
 
 # ---- edge limits at nginx ----------------------------------------------------------------------------
 raw_send "$CLUSTER_PORT" "$T/big.raw" 0 $'POST /v1/meshes HTTP/1.1\r\nHost: x\r\nContent-Type: application/octet-stream\r\nContent-Length: 300000000\r\n\r\n' ""
@@ -195,7 +210,7 @@ busy=0; for q in $(seq "$CLUSTER_PORT" $((CLUSTER_PORT + 4))); do ss -Htln "spor
 check_eq "down: every port is free again" "$busy" 0
 cluster up --replicas 1 --wipe -- --quiet --threads 1 >"$T/up3.out" 2>&1
 check_eq "up --wipe exits 0" "$?" 0
-http "$T/wiped.json" "$FRONT/v1/meshes/${IDS[0]}"
+http "$T/wiped.json" "$FRONT/v1/meshes/${IDS[2]}"
 check_eq "after --wipe, an old id is unknown (404)" "$STATUS" 404
 cluster down >/dev/null 2>&1
 CLUSTER_PORT=""

@@ -93,8 +93,10 @@ TEST(DirectoryStore, TellsDeletedFromUnknown) {
   TempFolder dir;
   auto store = open_directory_store(dir.path, {});
   store->put(kId, upload_of("x"));
+  EXPECT_TRUE(store->touch(kId));
   EXPECT_TRUE(store->erase(kId));
   EXPECT_FALSE(store->erase(kId));
+  EXPECT_FALSE(store->touch(kId));
   EXPECT_FALSE(store->get(kId).upload.has_value());
   EXPECT_EQ(store->get(kId).why, StoreMiss::deleted);
   EXPECT_EQ(store->get(kOtherId).why, StoreMiss::unknown);
@@ -419,6 +421,23 @@ TEST(DurableSessions, DeleteRemovesTheStoredUploadAndIsReportedDeleted) {
   EXPECT_EQ(sessions.find(id).why, DurableSessions::Gone::deleted);
   EXPECT_EQ(sessions.find(kOtherId).why, DurableSessions::Gone::unknown);
   EXPECT_EQ(rebuilds.count, 0);
+}
+
+TEST(DurableSessions, ADeleteOnOneReplicaReachesAnotherReplicasCache) {
+  RedisProcess redis;
+  ASSERT_TRUE(redis.up());
+  Rebuilds rebuilds;
+  SessionCache cache_a({1 << 20, std::chrono::seconds(60)}), cache_b({1 << 20, std::chrono::seconds(60)});
+  DurableSessions replica_a(cache_a, open_redis_store(address_of(redis.port()), {}), rebuilds.fn(), {});
+  DurableSessions replica_b(cache_b, open_redis_store(address_of(redis.port()), {}), rebuilds.fn(), {});
+  const auto id = (*replica_a.create(fresh_session(10), upload_of("shared")))->id;
+  ASSERT_TRUE(replica_b.find(id).rebuilt);  // now cached on both
+  ASSERT_NE(replica_b.find(id).session, nullptr);
+  ASSERT_TRUE(replica_a.erase(id, nullptr));
+  const auto found = replica_b.find(id);  // a cache hit on b, but the store says deleted
+  EXPECT_EQ(found.session, nullptr);
+  EXPECT_EQ(found.why, DurableSessions::Gone::deleted);
+  EXPECT_EQ(cache_b.stats().entries, 0u);
 }
 
 TEST(DurableSessions, AStoreThatRefusesLeavesNoSession) {
