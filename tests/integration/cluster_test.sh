@@ -184,6 +184,9 @@ check_eq "the other sessions still answer" "$LINE" "${LINES[2]}"
 # ---- edge limits at nginx ----------------------------------------------------------------------------
 raw_send "$CLUSTER_PORT" "$T/big.raw" 0 $'POST /v1/meshes HTTP/1.1\r\nHost: x\r\nContent-Type: application/octet-stream\r\nContent-Length: 300000000\r\n\r\n' ""
 check "nginx refuses a body over the upload limit from its Content-Length (413)" grep -q "^HTTP/1.1 413" "$T/big.raw"
+first_body "$T/big.raw" >"$T/big.json"
+validate_schema "nginx's own 413 has the service's JSON error shape" Error "$T/big.json"
+check_eq "nginx's 413 says payload_too_large" "$(jq -r .error.code "$T/big.json")" payload_too_large
 # A slowloris sender: nginx closes it after client_header_timeout (10 s) while serving others.
 slow_start=$(now_s)
 (
@@ -200,6 +203,16 @@ wait "${BG_PIDS[-1]}"
 close_s=$(cat "$T/slow.close" 2>/dev/null || echo none)
 check "nginx closed the slow header after its 10 s timeout (closed at ${close_s} s)" \
   awk -v s="$close_s" -v f="$FACTOR" 'BEGIN { exit !(s >= 9 && s < 15 * f) }'
+
+# ---- every replica down: nginx answers 503 in the JSON shape, not an HTML 502 ----------------------
+for pid in $(awk '$1 == "replica" { print $3 }' "$T/status3"); do kill -KILL "$pid"; done
+for _ in $(seq 1 50); do
+  alive=0; for pid in $(awk '$1 == "replica" { print $3 }' "$T/status3"); do kill -0 "$pid" 2>/dev/null && alive=1; done
+  [ $alive = 0 ] && break; sleep 0.1
+done
+http "$T/none.json" "$FRONT/v1/meshes/${IDS[2]}"
+expect "with every replica dead, nginx answers" 503 overloaded GET "/v1/meshes/${IDS[2]}" "$T/none.json"
+check "with Retry-After" test -n "$(header "$T/none.json" Retry-After)"
 
 # ---- down: nothing left; up --wipe forgets the uploads ---------------------------------------------
 cluster down >"$T/down2.out" 2>&1
