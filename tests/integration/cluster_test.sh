@@ -221,6 +221,10 @@ alive=0; for pid in "${PIDS2[@]}"; do kill -0 "$pid" 2>/dev/null && alive=$((ali
 check_eq "down: no process left (${#PIDS2[@]} pids checked)" "$alive" 0
 busy=0; for q in $(seq "$CLUSTER_PORT" $((CLUSTER_PORT + 4))); do ss -Htln "sport = :$q" | grep -q . && busy=1; done
 check_eq "down: every port is free again" "$busy" 0
+# Replicas stopped by SIGTERM exit normally: a sanitizer build reports there (leaks included).
+sanitizer=$(grep -l -E 'ERROR: (Address|Leak|Thread)Sanitizer|runtime error:' "$STATE"/logs/replica-*.log 2>/dev/null)
+if [ -z "$sanitizer" ]; then pass "no sanitizer reports in the replicas' logs"
+else fail "no sanitizer reports in the replicas' logs" "$(grep -h -A8 -E 'ERROR: (Address|Leak|Thread)Sanitizer|runtime error:' $sanitizer | head -n 40)"; fi
 cluster up --replicas 1 --wipe -- --quiet --threads 1 >"$T/up3.out" 2>&1
 check_eq "up --wipe exits 0" "$?" 0
 http "$T/wiped.json" "$FRONT/v1/meshes/${IDS[2]}"
