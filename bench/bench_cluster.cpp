@@ -5,7 +5,6 @@
 //
 // usage: bench_cluster --front PORT --replica PORT [--seconds S] [--copies K] [--levels 32,128,512]
 #include "api/feature_line_json.h"
-#include "bench/feature_keys.h"
 #include "bench/load_generator.h"
 #include "engine/mesh_io.h"
 
@@ -65,12 +64,7 @@ int main(int argc, char** argv) {
     std::printf("\n");
 
     const auto mesh = featureline::prepare_mesh(featureline::read_mesh(bunny, featureline::MeshFormat::off));
-    std::mt19937_64 rng(7);
-    std::vector<std::string> bodies;
-    while (bodies.size() < 64) {
-      const auto keys = featureline::pick_feature_keys(*mesh, rng);
-      if (!keys.empty()) bodies.push_back(nlohmann::json{{"keys", keys}}.dump());
-    }
+    const std::vector<std::string> bodies = featureline::bench::feature_line_bodies(*mesh, 64, 7);
     const featureline::bench::LoadTarget through_nginx{"127.0.0.1", front, paths, bodies};
     const featureline::bench::LoadTarget direct{"127.0.0.1", replica, paths, bodies};
     std::printf("\n3-key lines, %.0f s per level (client threads share the machine with the servers)\n", seconds);

@@ -6,7 +6,6 @@
 //
 // usage: bench_server [--seconds S] [--threads N]
 #include "api/feature_line_json.h"
-#include "bench/feature_keys.h"
 #include "bench/load_generator.h"
 #include "engine/mesh_io.h"
 #include "server/server.h"
@@ -100,12 +99,7 @@ int main(int argc, char** argv) {
     if (!res || res->status != 201) throw std::runtime_error("bunny upload failed");
     const std::string id = nlohmann::json::parse(res->body)["mesh_id"];
     const auto mesh = featureline::prepare_mesh(featureline::read_mesh(bunny, featureline::MeshFormat::off));
-    std::mt19937_64 rng(7);
-    std::vector<std::string> bodies;
-    while (bodies.size() < 64) {
-      const auto keys = featureline::pick_feature_keys(*mesh, rng);
-      if (!keys.empty()) bodies.push_back(nlohmann::json{{"keys", keys}}.dump());
-    }
+    const std::vector<std::string> bodies = featureline::bench::feature_line_bodies(*mesh, 64, 7);
     std::printf("3-key lines on bunny_closed.off (69,666 triangles), %zu engine threads, %.0f s per level:\n",
                 engine_threads, seconds);
     featureline::bench::print_load_header();

@@ -1,6 +1,7 @@
 #include "bench/load_generator.h"
 
 #include <httplib.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -9,7 +10,10 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <random>
 #include <thread>
+
+#include "bench/feature_keys.h"
 
 namespace featureline::bench {
 
@@ -19,6 +23,16 @@ double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
   return v[std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5))];
+}
+
+std::vector<std::string> feature_line_bodies(const PreparedMesh& mesh, std::size_t count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<std::string> bodies;
+  while (bodies.size() < count) {
+    const auto keys = pick_feature_keys(mesh, rng);
+    if (!keys.empty()) bodies.push_back(nlohmann::json{{"keys", keys}}.dump());
+  }
+  return bodies;
 }
 
 std::string read_file(const std::string& path) {

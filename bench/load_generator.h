@@ -4,8 +4,11 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
+
+#include "engine/prepared_mesh.h"
 
 namespace featureline::bench {
 
@@ -27,6 +30,10 @@ struct LoadLevel {
 LoadLevel run_load(const LoadTarget& target, int connections, double seconds);
 
 double percentile(std::vector<double> values, double q);
+
+/// `count` feature-line request bodies {"keys": [...]} with 3 keys along features of `mesh`
+/// (bench/feature_keys.h), from a seeded generator: the same set for every run and level.
+std::vector<std::string> feature_line_bodies(const PreparedMesh& mesh, std::size_t count, std::uint64_t seed);
 
 /// A benchmark input file's bytes. \throw std::runtime_error naming the missing file
 std::string read_file(const std::string& path);
