@@ -6,7 +6,7 @@
 //
 // usage: bench_server [--seconds S] [--threads N]
 #include "api/feature_line_json.h"
-#include "bench/feature_keys.h"
+#include "bench/load_generator.h"
 #include "engine/mesh_io.h"
 #include "server/server.h"
 
@@ -27,13 +27,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("missing benchmark mesh " + path);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 // Resident memory of this process (server and clients share it), from /proc/self/statm.
 double resident_mib() {
@@ -43,11 +36,6 @@ double resident_mib() {
   return resident * double(sysconf(_SC_PAGESIZE)) / (1 << 20);
 }
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5))];
-}
 
 }  // namespace
 
@@ -70,7 +58,7 @@ int main(int argc, char** argv) {
     std::thread serving([&] { server.run(); });
 
     // Upload-to-ready of igea: the whole POST (transfer, parse, prepare), median of 3.
-    const std::string igea = read_file(meshes + "igea.ply");
+    const std::string igea = featureline::bench::read_file(meshes + "igea.ply");
     std::vector<double> upload_ms;
     for (int i = 0; i < 3; ++i) {
       httplib::Client client("127.0.0.1", port);
@@ -82,7 +70,7 @@ int main(int argc, char** argv) {
       client.Delete(("/v1/meshes/" + nlohmann::json::parse(res->body)["mesh_id"].get<std::string>()).c_str());
     }
     std::printf("upload-to-ready igea.ply (268,686 triangles, %zu bytes): median %.0f ms of 3\n", igea.size(),
-                percentile(upload_ms, 0.5));
+                featureline::bench::percentile(upload_ms, 0.5));
     {
       // Memory per cached triangle: resident growth while 4 copies of igea are cached.
       httplib::Client client("127.0.0.1", port);
@@ -105,58 +93,18 @@ int main(int argc, char** argv) {
     }
 
     // Lines on the bunny: keys picked along features, the same set for every concurrency.
-    const std::string bunny = read_file(meshes + "bunny_closed.off");
+    const std::string bunny = featureline::bench::read_file(meshes + "bunny_closed.off");
     httplib::Client setup("127.0.0.1", port);
     auto res = setup.Post("/v1/meshes?format=off", bunny, "application/octet-stream");
     if (!res || res->status != 201) throw std::runtime_error("bunny upload failed");
     const std::string id = nlohmann::json::parse(res->body)["mesh_id"];
     const auto mesh = featureline::prepare_mesh(featureline::read_mesh(bunny, featureline::MeshFormat::off));
-    std::mt19937_64 rng(7);
-    std::vector<std::string> bodies;
-    while (bodies.size() < 64) {
-      const auto keys = featureline::pick_feature_keys(*mesh, rng);
-      if (!keys.empty()) bodies.push_back(nlohmann::json{{"keys", keys}}.dump());
-    }
+    const std::vector<std::string> bodies = featureline::bench::feature_line_bodies(*mesh, 64, 7);
     std::printf("3-key lines on bunny_closed.off (69,666 triangles), %zu engine threads, %.0f s per level:\n",
                 engine_threads, seconds);
-    std::printf("%12s %10s %10s %10s %10s %8s\n", "connections", "lines/s", "p50_ms", "p99_ms", "max_ms", "errors");
-    for (int connections : {1, 8, 32}) {
-      std::vector<std::vector<double>> latencies{std::size_t(connections)};
-      std::atomic<std::size_t> errors{0};
-      std::atomic<int> connected{0};
-      Clock::time_point end{};
-      std::atomic<bool> go{false};
-      std::vector<std::thread> clients;
-      for (int c = 0; c < connections; ++c)
-        clients.emplace_back([&, c] {
-          httplib::Client client("127.0.0.1", port);
-          client.set_keep_alive(true);
-          client.set_tcp_nodelay(true);
-          std::size_t i = std::size_t(c);
-          const std::string path = "/v1/meshes/" + id + "/feature-lines";
-          // Warm-up: connect and send one request before the timed window. The library's
-          // listen backlog is 5, so a burst of new connections can wait for a SYN retry (1 s);
-          // that is connection setup, not steady-state latency.
-          client.Post(path.c_str(), bodies[i % bodies.size()], "application/json");
-          ++connected;
-          while (!go) std::this_thread::yield();
-          while (Clock::now() < end) {
-            const auto t0 = Clock::now();
-            auto r = client.Post(path.c_str(), bodies[i++ % bodies.size()], "application/json");
-            const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-            if (!r || r->status != 200) ++errors;
-            else latencies[std::size_t(c)].push_back(ms);
-          }
-        });
-      while (connected < connections) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-      end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
-      go = true;
-      for (auto& t : clients) t.join();
-      std::vector<double> all;
-      for (const auto& l : latencies) all.insert(all.end(), l.begin(), l.end());
-      std::printf("%12d %10.0f %10.2f %10.2f %10.2f %8zu\n", connections, double(all.size()) / seconds,
-                  percentile(all, 0.5), percentile(all, 0.99), percentile(all, 1.0), errors.load());
-    }
+    featureline::bench::print_load_header();
+    const featureline::bench::LoadTarget target{"127.0.0.1", port, {"/v1/meshes/" + id + "/feature-lines"}, bodies};
+    for (int connections : {1, 8, 32}) featureline::bench::print_load_level(featureline::bench::run_load(target, connections, seconds));
     server.stop();
     serving.join();
   } catch (const std::exception& e) {

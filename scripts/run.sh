@@ -13,7 +13,10 @@ echo "== featureline detect $sample --keys $keys"
           refined: {points: (.refined.points|length), length: .refined.length}, timings_ms: .stats.timings_ms}'
 echo "== featureline-server with $sample preloaded"
 port=${PORT:-8080}
-"$build/server/featureline-server" --port "$port" --preload "$sample" --web-root web/dist | while IFS= read -r line; do
+# Uploads are kept on disk, so sessions survive restarts (DATA_DIR=... for another folder).
+data_dir=${DATA_DIR:-${XDG_STATE_HOME:-$HOME/.local/state}/featureline/data}
+mkdir -p "$data_dir"
+"$build/server/featureline-server" --port "$port" --preload "$sample" --web-root web/dist --data-dir "$data_dir" | while IFS= read -r line; do
   echo "$line"
   case "$line" in
     "preloaded "*)

@@ -6,6 +6,7 @@
 #include <new>
 
 #include "engine/errors.h"
+#include "server/upload_store.h"
 
 namespace featureline::server {
 
@@ -39,6 +40,10 @@ ErrorReply error_reply(std::exception_ptr error) {
     std::rethrow_exception(error);
   } catch (const HttpError& e) {
     r = {e.status(), e.code(), e.what(), e.headers()};
+  } catch (const StoreFullError& e) {
+    r = {503, "storage_full", e.what(), {{"Retry-After", "60"}}};
+  } catch (const StoreUnavailableError& e) {
+    r = {503, "storage_unavailable", e.what(), {{"Retry-After", "5"}}};
   } catch (const UnsupportedFormatError& e) {
     r = {415, "unsupported_format", e.what(), {}};
   } catch (const LimitExceededError& e) {

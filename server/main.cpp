@@ -32,6 +32,12 @@ const char* const kUsage = R"(usage: featureline-server [options]
   --cors-origin O     allow browser requests from origin O ("*" for any); repeatable
   --preload FILE      load FILE at start and print its mesh id; repeatable
   --web-root DIR      serve DIR at / (the browser front-end)
+  --data-dir DIR      keep every upload in DIR (atomic writes), so sessions survive eviction and
+                      restarts (a miss prepares the mesh again from the stored upload)
+  --store URL         where uploads are kept: redis://HOST:PORT[/DB] (shared by a cluster's
+                      replicas) or dir:PATH (as --data-dir); default: memory only
+  --store-max-mb M    a directory store holds at most M MiB of uploads; beyond, uploads get 503
+                      storage_full (Redis: its own maxmemory, with maxmemory-policy noeviction)
   --port-file F       write the bound port to F once listening (for tests)
   --quiet             no access log
 )";
@@ -80,6 +86,9 @@ int main(int argc, char** argv) {
       else if (flag == "--cors-origin") options.cors_origins.push_back(value());
       else if (flag == "--preload") options.preload.push_back(value());
       else if (flag == "--web-root") options.web_root = value();
+      else if (flag == "--data-dir") options.store = "dir:" + value();
+      else if (flag == "--store") options.store = value();
+      else if (flag == "--store-max-mb") options.store_max_mb = std::size_t(number(value(), "--store-max-mb", 1, 1 << 24));
       else if (flag == "--port-file") port_file = value();
       else if (flag == "--quiet") options.access_log = false;
       else if (flag == "-h" || flag == "--help") throw UsageError("");
@@ -119,6 +128,8 @@ int main(int argc, char** argv) {
       std::printf("  curl -s %s/v1/meshes/%s\n", base.c_str(), id.c_str());
     }
     if (!options.web_root.empty()) std::printf("open %s/\n", base.c_str());
+    std::printf("uploads kept %s\n", options.store.empty() ? "in memory only (a restart forgets them; see --data-dir)"
+                                                            : ("in " + options.store).c_str());
     std::fflush(stdout);
     if (!port_file.empty()) {
       std::FILE* f = std::fopen(port_file.c_str(), "w");

@@ -32,6 +32,7 @@
 #include "server/metrics.h"
 #include "server/session_cache.h"
 #include "server/transport.h"
+#include "server/upload_store.h"
 #include "server/work_pool.h"
 
 namespace featureline::server {
@@ -112,6 +113,31 @@ ReadMeshOptions upload_read_limits(const ServerOptions& o) {
   return limits;
 }
 
+// The store's idle clock is restarted at most this often per session: a quarter of the TTL, at
+// most a minute. The store keeps uploads this much longer than the cache keeps prepared meshes.
+std::chrono::seconds store_touch_interval(const ServerOptions& o) { return std::chrono::seconds(std::clamp(o.ttl_s / 4, 1, 60)); }
+
+std::unique_ptr<UploadStore> open_store(const ServerOptions& o) {
+  if (o.store.empty()) return nullptr;
+  StoreOptions store_options;
+  store_options.idle_ttl = std::chrono::seconds(o.ttl_s) + store_touch_interval(o);
+  store_options.max_bytes = o.store_max_mb << 20;
+  return open_upload_store(o.store, store_options);
+}
+
+// Reads and prepares an upload: engine work, run on the pool (uploads and rebuilds alike).
+MeshSession prepare_session(std::string_view bytes, MeshFormat format, const ReadMeshOptions& limits,
+                            const Cancellation* cancel) {
+  const auto t0 = Clock::now();
+  RawMesh raw = read_mesh(bytes, format, limits);
+  MeshSession s;
+  s.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  s.format = format;
+  s.mesh = prepare_mesh(std::move(raw), {}, cancel);
+  s.bytes = s.mesh->memory_bytes();
+  return s;
+}
+
 }  // namespace
 
 struct FeaturelineServer::Impl {
@@ -120,6 +146,7 @@ struct FeaturelineServer::Impl {
   const ReadMeshOptions read_limits;
   SessionCache cache;
   WorkPool pool;
+  DurableSessions sessions;  // the cache in front of the upload store (if any)
   Metrics metrics;
   const Clock::time_point started = Clock::now();
   std::mutex log_mutex;
@@ -134,13 +161,15 @@ struct FeaturelineServer::Impl {
         http(transport_limits(options, [this](const ErrorReply& refusal) { record_transport_refusal(refusal); })),
         read_limits(upload_read_limits(options)),
         cache(SessionCache::Options{options.cache_mb << 20, std::chrono::seconds(options.ttl_s), [] { return Clock::now(); }}),
-        pool(options.engine_threads, options.queue_capacity) {
+        pool(options.engine_threads, options.queue_capacity),
+        sessions(cache, open_store(options), [this](std::shared_ptr<const StoredUpload> upload) { return rebuild(std::move(upload)); },
+                 {store_touch_interval(options)}) {
     configure_transport();
     register_routes();
     sweeper = std::thread([this] {
       std::unique_lock<std::mutex> lock(sweeper_mutex);
       while (!sweeper_wake.wait_for(lock, std::chrono::seconds(5), [this] { return sweeper_stop; })) {
-        cache.expire_idle();
+        if (!sessions.expire_idle()) log_line("the upload store could not be swept; retrying in 5 s");
         return_freed_memory();
       }
     });
@@ -270,18 +299,36 @@ struct FeaturelineServer::Impl {
     return future->get();  // rethrows what the job threw
   }
 
+  // A session from the cache, or rebuilt from the upload store (a 503 when the store is down).
   std::shared_ptr<const MeshSession> session_or_404(const std::string& id) {
-    SessionCache::Miss why = SessionCache::Miss::unknown;
-    auto session = cache.find(id, &why);
-    if (session) return session;
+    auto found = sessions.find(id);
+    if (!found.session) throw not_found(id, found.why);
+    return found.session;
+  }
+
+  // The 404 says which: never issued, deleted, expired or (memory only) evicted.
+  HttpError not_found(const std::string& id, DurableSessions::Gone why) const {
+    const std::string mesh = "mesh " + quote_client_text(id);
     switch (why) {
-      case SessionCache::Miss::expired:
-        throw HttpError(404, "not_found", "mesh " + id + " expired after " + std::to_string(options.ttl_s) +
-                                              " s without use; upload it again");
-      case SessionCache::Miss::evicted:
-        throw HttpError(404, "not_found", "mesh " + id + " was evicted to make room for newer uploads; upload it again");
-      default: throw HttpError(404, "not_found", "no mesh with id " + id);
+      case DurableSessions::Gone::deleted: return HttpError(404, "not_found", mesh + " was deleted");
+      case DurableSessions::Gone::expired:
+        return HttpError(404, "not_found", mesh + " expired after " + std::to_string(options.ttl_s) + " s without use; upload it again");
+      case DurableSessions::Gone::evicted:
+        return HttpError(404, "not_found", mesh + " was evicted to make room for newer uploads; upload it again");
+      default: return HttpError(404, "not_found", "no mesh with id " + quote_client_text(id));
     }
+  }
+
+  // Prepares a stored upload again after a cache miss (eviction, restart, another replica's id).
+  MeshSession rebuild(std::shared_ptr<const StoredUpload> upload) {
+    return run_on_pool([upload, limits = read_limits](const Cancellation* cancel) {
+      return prepare_session(upload->bytes, upload->format, limits, cancel);
+    });
+  }
+
+  void log_line(const std::string& text) {
+    std::lock_guard<std::mutex> lock(log_mutex);
+    std::fprintf(stderr, "featureline-server: %s\n", text.c_str());
   }
 
   json describe(const MeshSession& s) const {
@@ -324,7 +371,8 @@ struct FeaturelineServer::Impl {
       write_json(res, 200, describe(*session_or_404(req.matches[1])));
     }));
     http.Delete(mesh, guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
-      if (!cache.erase(req.matches[1])) session_or_404(req.matches[1]);  // says why it is gone
+      auto why = DurableSessions::Gone::unknown;
+      if (!sessions.erase(req.matches[1], &why)) throw not_found(req.matches[1], why);
       res.status = 204;
     }));
     http.Get(mesh + "/mesh\\.glb", guarded("/v1/meshes/{id}/mesh.glb", [this](const auto& req, auto& res) {
@@ -364,6 +412,10 @@ struct FeaturelineServer::Impl {
           {"featureline_cache_evictions_total", {"Sessions evicted to stay within the budget.", double(s.evictions)}},
           {"featureline_cache_expirations_total", {"Sessions expired after their idle time.", double(s.expirations)}},
           {"featureline_cache_inserts_total", {"Meshes uploaded and prepared.", double(s.inserts)}},
+          {"featureline_store_rebuilds_total", {"Sessions prepared again from the upload store after a cache miss.",
+                                                double(sessions.rebuilds())}},
+          {"featureline_store_bytes", {"Upload bytes held by a directory store.",
+                                       double(sessions.store() ? sessions.store()->bytes() : 0)}},
           {"featureline_pool_queue_depth", {"Engine jobs waiting for a thread.", double(pool.queue_depth())}},
           {"featureline_pool_running", {"Engine jobs running.", double(pool.running())}},
           {"featureline_pool_threads", {"Engine threads.", double(pool.threads())}},
@@ -477,7 +529,9 @@ struct FeaturelineServer::Impl {
     std::optional<MeshFormat> format = head.format;
     const UploadReservation reservation(*this, length);
 
-    std::string body;
+    // The bytes are kept as uploaded: the store holds them so the mesh can be prepared again.
+    auto upload = std::make_shared<StoredUpload>();
+    std::string& body = upload->bytes;
     body.reserve(length);
     const bool complete = reader([&](const char* data, std::size_t size) {
       if (body.size() + size > length) return false;
@@ -493,20 +547,15 @@ struct FeaturelineServer::Impl {
     if (!format)
       throw HttpError(415, "unsupported_format",
                       "could not tell the mesh format from its bytes; pass ?format=obj|off|ply|stl|glb|gltf|drc");
+    upload->format = *format;
+    upload->uploaded_at_unix_s = std::int64_t(std::time(nullptr));
 
-    const MeshFormat fmt = *format;
-    MeshSession session = run_on_pool([body = std::move(body), fmt, limits = read_limits](const Cancellation* cancel) {
-      const auto t0 = Clock::now();
-      RawMesh raw = read_mesh(body, fmt, limits);
-      MeshSession s;
-      s.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-      s.format = fmt;
-      s.mesh = prepare_mesh(std::move(raw), {}, cancel);
-      s.bytes = s.mesh->memory_bytes();
-      return s;
+    MeshSession session = run_on_pool([upload = std::shared_ptr<const StoredUpload>(upload), limits = read_limits](
+                                          const Cancellation* cancel) {
+      return prepare_session(upload->bytes, upload->format, limits, cancel);
     });
     const std::size_t needed = session.bytes;
-    auto stored = cache.insert(std::move(session));
+    auto stored = sessions.create(std::move(session), *upload);  // a full or unreachable store: 503, nothing kept
     if (!stored)
       throw HttpError(413, "payload_too_large",
                       "the prepared mesh needs " + std::to_string(needed >> 20) + " MiB, more than the cache's whole budget of " +
@@ -654,7 +703,7 @@ std::string FeaturelineServer::preload(const std::string& path) {
   MeshSession s;
   s.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   s.format = raw.format;
-  s.mesh = prepare_mesh(std::move(raw));
+  s.mesh = prepare_mesh(std::move(raw), {}, cancel);
   s.bytes = s.mesh->memory_bytes();
   s.pinned = true;  // the bundled sample stays available however long the server runs
   auto stored = impl_->cache.insert(std::move(s));

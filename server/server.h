@@ -32,6 +32,10 @@ struct ServerOptions {
   std::vector<std::string> preload;       ///< meshes loaded at start (their ids are printed)
   bool access_log = true;                 ///< one line per request on stderr
   std::string web_root;                   ///< folder served at / (empty: none)
+  /// Where uploads are kept so sessions survive eviction and restarts (server/upload_store.h):
+  /// a folder ("dir:PATH" or PATH), "redis://HOST:PORT[/DB]", or empty for memory only.
+  std::string store;
+  std::size_t store_max_mb = 0;           ///< directory store: total upload bytes kept (0: no limit)
 };
 
 class FeaturelineServer {

@@ -57,8 +57,12 @@ std::optional<std::shared_ptr<const MeshSession>> SessionCache::insert(MeshSessi
   if (pinned_bytes_ + session.bytes > options_.byte_budget) return std::nullopt;
   const auto now = options_.now();
   expire_idle_locked(now);
-  do session.id = random_session_id();
-  while (entries_.count(session.id) != 0);
+  if (session.id.empty()) {
+    do session.id = random_session_id();
+    while (entries_.count(session.id) != 0);
+  } else if (auto existing = entries_.find(session.id); existing != entries_.end()) {
+    return existing->second.session;
+  }
   while (!lru_.empty() && bytes_ + session.bytes > options_.byte_budget) {
     auto it = entries_.find(lru_.back());
     bytes_ -= it->second.session->bytes;
@@ -105,6 +109,7 @@ bool SessionCache::erase(const std::string& id) {
   bytes_ -= it->second.session->bytes;
   if (it->second.session->pinned) pinned_bytes_ -= it->second.session->bytes;
   else lru_.erase(it->second.position);
+  remember_gone(id, Miss::deleted);
   entries_.erase(it);
   return true;
 }
@@ -129,6 +134,160 @@ double SessionCache::expires_in_s(const std::string& id) const {
   if (it->second.session->pinned) return -1;  // never
   const auto left = options_.idle_ttl - (options_.now() - it->second.last_used);
   return std::max(0.0, std::chrono::duration<double>(left).count());
+}
+
+// ---- DurableSessions ---------------------------------------------------------------------------
+
+namespace {
+DurableSessions::Gone gone_from(SessionCache::Miss miss) {
+  switch (miss) {
+    case SessionCache::Miss::expired: return DurableSessions::Gone::expired;
+    case SessionCache::Miss::evicted: return DurableSessions::Gone::evicted;
+    case SessionCache::Miss::deleted: return DurableSessions::Gone::deleted;
+    default: return DurableSessions::Gone::unknown;
+  }
+}
+}  // namespace
+
+DurableSessions::DurableSessions(SessionCache& cache, std::unique_ptr<UploadStore> store, Rebuild rebuild, Options options)
+    : cache_(cache), store_(std::move(store)), rebuild_(std::move(rebuild)), options_(options) {}
+
+DurableSessions::Gone DurableSessions::why_gone(const std::string& id, StoreMiss store_miss) {
+  if (store_miss == StoreMiss::deleted) return Gone::deleted;
+  if (store_miss == StoreMiss::expired) return Gone::expired;
+  // The store never had it (or no store): what this process remembers, if anything.
+  SessionCache::Miss miss = SessionCache::Miss::unknown;
+  if (cache_.find(id, &miss)) return Gone::unknown;  // cached meanwhile: the caller retries
+  return gone_from(miss);
+}
+
+DurableSessions::Found DurableSessions::find(const std::string& id) {
+  Found found;
+  SessionCache::Miss miss = SessionCache::Miss::unknown;
+  found.session = cache_.find(id, &miss);
+  if (found.session) {
+    if (still_stored(id)) return found;
+    // Deleted or expired in the store by another replica: the cached copy goes too.
+    cache_.erase(id);
+    found.session = nullptr;
+    found.why = why_gone(id, store_->get(id).why);
+    return found;
+  }
+  if (!store_) {
+    found.why = gone_from(miss);
+    return found;
+  }
+  return rebuild_once(id);
+}
+
+// Single flight: the first request for a missing id rebuilds it; the others wait for its result.
+DurableSessions::Found DurableSessions::rebuild_once(const std::string& id) {
+  std::promise<Found> promise;
+  std::shared_future<Found> flight;
+  bool leader = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (auto it = flights_.find(id); it != flights_.end()) {
+      flight = it->second;
+    } else {
+      flight = promise.get_future().share();
+      flights_.emplace(id, flight);
+      leader = true;
+    }
+  }
+  if (leader) {
+    try {
+      promise.set_value(load_from_store(id));
+    } catch (...) {
+      promise.set_exception(std::current_exception());
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    flights_.erase(id);
+  }
+  return flight.get();  // rethrows the leader's exception
+}
+
+DurableSessions::Found DurableSessions::load_from_store(const std::string& id) {
+  Found found;
+  // A flight that ended between this request's cache miss and now may have cached it already.
+  if ((found.session = cache_.find(id))) return found;
+  StoreLookup lookup = store_->get(id);
+  if (!lookup.upload) {
+    found.why = why_gone(id, lookup.why);
+    return found;
+  }
+  MeshSession session = rebuild_(std::make_shared<const StoredUpload>(std::move(*lookup.upload)));
+  session.id = id;
+  const std::size_t bytes = session.bytes;
+  auto cached = cache_.insert(std::move(session));
+  if (!cached)
+    throw std::runtime_error("mesh " + id + " needs " + std::to_string(bytes >> 20) + " MiB, more than the whole session cache");
+  ++rebuilds_;
+  found.session = *cached;
+  found.rebuilt = true;
+  still_stored(id);  // restarts the store's idle clock
+  return found;
+}
+
+// Restarts the store's idle clock when due (every use for a shared store); false only when
+// the store says the upload is gone.
+bool DurableSessions::still_stored(const std::string& id) {
+  if (!store_) return true;
+  const auto now = SessionCache::Clock::now();
+  if (!store_->shared()) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (touched_.size() > 100000) touched_.clear();  // bounded: forgetting only costs an early touch
+    auto& last = touched_[id];
+    if (last != SessionCache::Clock::time_point{} && now - last < options_.touch_interval) return true;
+    last = now;
+  }
+  try {
+    return store_->touch(id);
+  } catch (const StoreUnavailableError&) {
+    // The session is in memory and answers; the next use tries again.
+    std::lock_guard<std::mutex> lock(mutex_);
+    touched_.erase(id);
+    return true;
+  }
+}
+
+std::optional<std::shared_ptr<const MeshSession>> DurableSessions::create(MeshSession session, const StoredUpload& upload) {
+  session.id.clear();  // a fresh random id
+  auto cached = cache_.insert(std::move(session));
+  if (!cached || !store_) return cached;
+  const std::string id = (*cached)->id;
+  try {
+    store_->put(id, upload);
+  } catch (...) {
+    cache_.erase(id);  // not durable, so not a session: the client gets the store's error
+    throw;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  touched_[id] = SessionCache::Clock::now();
+  return cached;
+}
+
+bool DurableSessions::erase(const std::string& id, Gone* why) {
+  const bool cached = cache_.erase(id);
+  const bool stored = store_ && store_->erase(id);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    touched_.erase(id);
+  }
+  if (cached || stored) return true;
+  if (why != nullptr) *why = why_gone(id, store_ ? store_->get(id).why : StoreMiss::unknown);
+  return false;
+}
+
+bool DurableSessions::expire_idle() {
+  cache_.expire_idle();
+  if (!store_) return true;
+  try {
+    store_->expire_idle();
+    return true;
+  } catch (const StoreUnavailableError&) {
+    return false;
+  }
 }
 
 }  // namespace featureline::server

@@ -4,6 +4,7 @@
 // the memory is freed when the last of them finishes.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -14,8 +15,11 @@
 #include <string>
 #include <unordered_map>
 
+#include <future>
+
 #include "engine/mesh_io.h"
 #include "engine/prepared_mesh.h"
+#include "server/upload_store.h"
 
 namespace featureline::server {
 
@@ -47,19 +51,20 @@ class SessionCache {
   };
 
   /// Why a lookup found nothing.
-  enum class Miss { unknown, expired, evicted };
+  enum class Miss { unknown, expired, evicted, deleted };
 
   explicit SessionCache(Options options);
 
-  /// Stores a new session under a fresh random id (set on the returned copy) and evicts least
-  /// recently used sessions until the budget holds. A session larger than the whole budget is
-  /// refused (std::nullopt).
+  /// Stores a session under its id, or under a fresh random id (set on the returned copy) when
+  /// it has none, and evicts least recently used sessions until the budget holds. A session
+  /// larger than the whole budget is refused (std::nullopt). When the id is already cached, the
+  /// cached session is returned and `session` dropped (two rebuilds of one id give one entry).
   std::optional<std::shared_ptr<const MeshSession>> insert(MeshSession session);
 
   /// The session, refreshed as most recently used; or why not.
   std::shared_ptr<const MeshSession> find(const std::string& id, Miss* why = nullptr);
 
-  /// Removes a session; false when there was none.
+  /// Removes a session (remembered as deleted); false when there was none.
   bool erase(const std::string& id);
 
   /// Drops every session idle longer than the TTL (also done lazily by find and insert).
@@ -89,6 +94,69 @@ class SessionCache {
   // Recently removed ids and why, so a 404 can say "expired" or "evicted" (bounded).
   std::unordered_map<std::string, Miss> gone_;
   std::list<std::string> gone_order_;
+};
+
+/// Sessions that outlive memory and restarts: the cache in front of an UploadStore (issue 11).
+/// An upload is stored before it is cached; a cache miss asks the store and rebuilds the prepared
+/// mesh from the stored bytes (once, however many requests wait for it), so eviction, a restart
+/// or another replica costs a rebuild, not the session. Without a store it is the cache alone.
+class DurableSessions {
+ public:
+  /// Prepares a stored upload again (read + prepare); the server runs it on its engine pool.
+  using Rebuild = std::function<MeshSession(std::shared_ptr<const StoredUpload>)>;
+
+  struct Options {
+    /// The store's idle clock is restarted at most this often per session; the store keeps
+    /// uploads this much longer than the cache. A shared store (Redis) is asked on every use
+    /// instead: another replica may have deleted the upload, and a cached copy must not outlive it.
+    std::chrono::seconds touch_interval{60};
+  };
+
+  /// Why a session could not be found.
+  enum class Gone { unknown, deleted, expired, evicted };
+
+  struct Found {
+    std::shared_ptr<const MeshSession> session;  ///< null when gone
+    Gone why = Gone::unknown;                    ///< meaningful when session is null
+    bool rebuilt = false;                        ///< prepared again from the store by this lookup
+  };
+
+  DurableSessions(SessionCache& cache, std::unique_ptr<UploadStore> store, Rebuild rebuild, Options options);
+
+  /// The session: from the cache, else rebuilt from the store. 	hrow StoreUnavailableError, and
+  /// what Rebuild throws (every waiter on the same rebuild gets the same exception)
+  Found find(const std::string& id);
+
+  /// A new upload's session: stored first, then cached under a fresh id. std::nullopt when the
+  /// prepared mesh exceeds the cache's whole budget (nothing is stored then).
+  /// 	hrow StoreFullError, StoreUnavailableError (nothing is kept then)
+  std::optional<std::shared_ptr<const MeshSession>> create(MeshSession session, const StoredUpload& upload);
+
+  /// Removes the session from the cache and the store; false (and why) when neither had it.
+  bool erase(const std::string& id, Gone* why);
+
+  /// Expires idle sessions in the cache and idle uploads in the store; false when the store
+  /// failed (the next call tries again).
+  bool expire_idle();
+
+  bool durable() const { return store_ != nullptr; }
+  const UploadStore* store() const { return store_.get(); }
+  std::size_t rebuilds() const { return rebuilds_.load(); }
+
+ private:
+  Found rebuild_once(const std::string& id);
+  Found load_from_store(const std::string& id);
+  Gone why_gone(const std::string& id, StoreMiss store_miss);
+  bool still_stored(const std::string& id);
+
+  SessionCache& cache_;
+  std::unique_ptr<UploadStore> store_;
+  Rebuild rebuild_;
+  Options options_;
+  std::atomic<std::size_t> rebuilds_{0};
+  std::mutex mutex_;  // guards flights_ and touched_
+  std::unordered_map<std::string, std::shared_future<Found>> flights_;  // rebuilds in progress
+  std::unordered_map<std::string, SessionCache::Clock::time_point> touched_;
 };
 
 }  // namespace featureline::server

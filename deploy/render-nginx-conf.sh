@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Renders deploy/nginx.conf.template to stdout, for scripts/cluster.sh (loopback replicas) and
+# for the containers of docker/ (replicas by service name: nginx resolves every address of a
+# name, so "featureline:8080" with 3 replicas behind it gives 3 peers on the hash ring).
+#
+#   deploy/render-nginx-conf.sh STATE_DIR LISTEN MAX_UPLOAD_MB REPLICA... > nginx.conf
+#     STATE_DIR      pid file, logs and temporary files (writable by nginx)
+#     LISTEN         what nginx listens on: 127.0.0.1:8080, or 8080 for every address
+#     MAX_UPLOAD_MB  the replicas' --max-upload-mb (larger bodies get 413 at the edge)
+#     REPLICA        HOST:PORT of a featureline-server, one or more
+#   NGINX_USER=name sets the workers' user; by default, started as root the workers stay root
+#   (they must reach STATE_DIR, which may be under a private folder); otherwise nginx keeps
+#   the user who starts it.
+set -euo pipefail
+[ $# -ge 4 ] || { sed -n '6,14p' "$0" | sed 's/^# *//' >&2; exit 2; }
+template="$(cd "$(dirname "$0")" && pwd)/nginx.conf.template"
+state=$1 listen=$2 max_upload_mb=$3
+shift 3
+if [ -n "${NGINX_USER:-}" ]; then user="user $NGINX_USER;"
+elif [ "$(id -u)" = 0 ]; then user="user root root;"
+else user="# user: not started as root, nginx keeps the user who started it"; fi
+replicas=$(IFS='|'; echo "$*")
+awk -v state="$state" -v listen="$listen" -v mb="$max_upload_mb" -v user="$user" -v replicas="$replicas" '
+  { gsub(/@STATE@/, state); gsub(/@LISTEN@/, listen); gsub(/@MAX_UPLOAD_MB@/, mb); gsub(/@USER@/, user) }
+  /^@REPLICAS@$/ {
+    n = split(replicas, r, "|")
+    for (i = 1; i <= n; i++) printf "    server %s max_fails=1 fail_timeout=10s;\n", r[i]
+    next
+  }
+  { print }' "$template"

@@ -1,0 +1,183 @@
+#!/usr/bin/env bash
+# The cluster on one machine without Docker (issue 11): nginx (Debian's) in front on port P,
+# Redis as the shared upload store, and N featureline-server replicas on loopback ports.
+#
+#   scripts/cluster.sh up     --port P [--replicas N] [--wipe] [--state-dir D] [-- SERVER FLAGS...]
+#   scripts/cluster.sh status --port P [--state-dir D]
+#   scripts/cluster.sh down   --port P [--wipe] [--state-dir D]
+#
+# Ports: Redis on P+1, replica I (1..N) on P+1+I (each checked free before it starts).
+# State (pid files, logs, the rendered nginx.conf, Redis' append-only file) lives in
+# D = ${XDG_STATE_HOME:-~/.local/state}/featureline/cluster-P; Redis' data persists across
+# down/up unless --wipe. `up` starts only what is not running (it also restarts a dead replica).
+# status prints one line per process: "nginx PID PORT", "redis PID PORT", "replica I PID PORT"
+# (PID "-" when not running); it exits 0 when all run, 1 when some do not, 3 when none does.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+
+usage() { sed -n '4,8p' "$0" | sed 's/^# *//' >&2; exit 2; }
+die() { echo "cluster: $*" >&2; exit 1; }
+
+command=${1:-}; [ $# -gt 0 ] && shift
+port="" replicas=3 wipe=0 state="" server_flags=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --port) port=${2:-}; shift 2 ;;
+    --replicas) replicas=${2:-}; shift 2 ;;
+    --wipe) wipe=1; shift ;;
+    --state-dir) state=${2:-}; shift 2 ;;
+    --) shift; server_flags=("$@"); break ;;
+    *) usage ;;
+  esac
+done
+case "$command" in up|status|down) ;; *) usage ;; esac
+[[ "$port" =~ ^[0-9]+$ ]] && [ "$port" -ge 1024 ] && [ "$port" -le 65000 ] || die "--port must be a number 1024-65000"
+[[ "$replicas" =~ ^[0-9]+$ ]] && [ "$replicas" -ge 1 ] && [ "$replicas" -le 32 ] || die "--replicas must be 1-32"
+state=${state:-${XDG_STATE_HOME:-$HOME/.local/state}/featureline/cluster-$port}
+server_bin=${SERVER:-$root/build/server/featureline-server}
+nginx_bin=${NGINX:-/usr/sbin/nginx}
+redis_bin=${REDIS_SERVER:-/usr/bin/redis-server}
+max_upload_mb=256
+redis_port=$((port + 1))
+
+# ---- processes ----------------------------------------------------------------------------------
+
+# The live pid recorded for NAME whose command line contains WORD, or nothing (a stale pid file,
+# or a pid the kernel has since given to another program, is not ours).
+pid_of() {
+  local file="$state/pids/$1.pid" pid
+  [ -s "$file" ] || return 0
+  pid=$(tr -dc 0-9 <"$file")
+  [ -n "$pid" ] && [ -r "/proc/$pid/cmdline" ] && tr '\0' ' ' <"/proc/$pid/cmdline" | grep -q -- "$2" && echo "$pid"
+  return 0
+}
+replica_port() { echo $((port + 1 + $1)); }
+# Replicas recorded by a previous `up` (status and down use what was started, not --replicas).
+started_replicas() {
+  if [ -s "$state/replicas" ]; then cat "$state/replicas"; else echo "$replicas"; fi
+}
+
+port_free() { ! ss -Htln "sport = :$1" 2>/dev/null | grep -q .; }
+
+# wait_until SECONDS COMMAND...: polls every 0.1 s, bounded.
+wait_until() {
+  local limit=$(($1 * 10)) i; shift
+  for ((i = 0; i < limit; i++)); do "$@" && return 0; sleep 0.1; done
+  return 1
+}
+http_ok() { curl -s -o /dev/null --max-time 2 -f "http://127.0.0.1:$1/healthz"; }
+redis_ok() { redis-cli -h 127.0.0.1 -p "$redis_port" ping 2>/dev/null | grep -q PONG; }
+
+# stop_pid NAME PID: TERM, up to 10 s, then KILL; waits until the process is gone.
+stop_pid() {
+  local name=$1 pid=$2 i
+  kill -TERM "$pid" 2>/dev/null || return 0
+  for ((i = 0; i < 100; i++)); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+  if kill -0 "$pid" 2>/dev/null; then
+    echo "cluster: $name (pid $pid) ignored SIGTERM for 10 s; killing it" >&2
+    kill -KILL "$pid" 2>/dev/null
+    for ((i = 0; i < 50; i++)); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+  fi
+}
+
+start_redis() {
+  [ -n "$(pid_of redis redis-server)" ] && return 0
+  port_free "$redis_port" || die "port $redis_port (Redis) is taken"
+  mkdir -p "$state/redis"
+  "$redis_bin" "$root/deploy/redis.conf" --port "$redis_port" --bind 127.0.0.1 --dir "$state/redis" \
+    --daemonize yes --pidfile "$state/pids/redis.pid" --logfile "$state/logs/redis.log"
+  wait_until 10 redis_ok || die "Redis did not answer on port $redis_port (see $state/logs/redis.log)"
+}
+
+start_replica() {
+  local i=$1 p; p=$(replica_port "$1")
+  [ -n "$(pid_of "replica-$i" featureline-server)" ] && return 0
+  port_free "$p" || die "port $p (replica $i) is taken"
+  [ -x "$server_bin" ] || die "no server at $server_bin (build it: scripts/setup.sh)"
+  # setsid: the replica outlives this script and its terminal; its pid is recorded for down.
+  # nginx holds the clients and opens a connection per request in flight: each replica takes up
+  # to 512 of them (256 workers) and still refuses engine work beyond its queue with 503.
+  setsid "$server_bin" --host 127.0.0.1 --port "$p" --store "redis://127.0.0.1:$redis_port" \
+    --web-root "$root/web/dist" --max-upload-mb "$max_upload_mb" --http-threads 256 "${server_flags[@]}" \
+    </dev/null >"$state/logs/replica-$i.out" 2>>"$state/logs/replica-$i.log" &
+  echo $! >"$state/pids/replica-$i.pid"
+}
+
+render_nginx_conf() {
+  local servers=() i
+  for ((i = 1; i <= replicas; i++)); do servers+=("127.0.0.1:$(replica_port "$i")"); done
+  "$root/deploy/render-nginx-conf.sh" "$state" "127.0.0.1:$port" "$max_upload_mb" "${servers[@]}" >"$state/nginx.conf"
+}
+
+start_nginx() {
+  render_nginx_conf
+  mkdir -p "$state/nginx-temp"
+  # -e: the error log from the first line on (nginx would otherwise open /var/log/nginx first).
+  "$nginx_bin" -t -q -p "$state" -e "$state/logs/nginx-error.log" -c "$state/nginx.conf" ||
+    die "nginx -t refused $state/nginx.conf"
+  local pid; pid=$(pid_of nginx nginx)
+  if [ -n "$pid" ]; then
+    kill -HUP "$pid"  # reload: the replica list may have changed
+    return 0
+  fi
+  port_free "$port" || die "port $port (nginx) is taken"
+  "$nginx_bin" -p "$state" -e "$state/logs/nginx-error.log" -c "$state/nginx.conf"
+  wait_until 10 test -s "$state/nginx.pid" || die "nginx did not start (see $state/logs/nginx-error.log)"
+  cp "$state/nginx.pid" "$state/pids/nginx.pid"
+}
+
+# ---- commands ---------------------------------------------------------------------------------
+
+status() {
+  [ -d "$state/pids" ] || { echo "cluster: nothing started on port $port ($state)" >&2; return 3; }
+  local n; n=$(started_replicas)
+  local running=0 total=$((n + 2)) pid i
+  pid=$(pid_of nginx nginx); echo "nginx ${pid:--} $port"; [ -n "$pid" ] && running=$((running + 1))
+  pid=$(pid_of redis redis-server); echo "redis ${pid:--} $redis_port"; [ -n "$pid" ] && running=$((running + 1))
+  for ((i = 1; i <= n; i++)); do
+    pid=$(pid_of "replica-$i" featureline-server)
+    echo "replica $i ${pid:--} $(replica_port "$i")"
+    [ -n "$pid" ] && running=$((running + 1))
+  done
+  [ "$running" = "$total" ] && return 0
+  [ "$running" = 0 ] && return 3
+  return 1
+}
+
+up() {
+  command -v "$nginx_bin" >/dev/null || die "no nginx at $nginx_bin (scripts/setup.sh installs it)"
+  command -v "$redis_bin" >/dev/null || die "no redis-server at $redis_bin (scripts/setup.sh installs it)"
+  [ -f "$root/web/dist/index.html" ] || die "no built page in web/dist (scripts/setup.sh builds it)"
+  if [ "$wipe" = 1 ]; then
+    [ -z "$(pid_of redis redis-server)" ] || die "--wipe needs the cluster down first"
+    rm -rf "$state/redis"
+  fi
+  mkdir -p "$state/pids" "$state/logs"
+  echo "$replicas" >"$state/replicas"
+  start_redis
+  local i
+  for ((i = 1; i <= replicas; i++)); do start_replica "$i"; done
+  for ((i = 1; i <= replicas; i++)); do
+    wait_until 30 http_ok "$(replica_port "$i")" || die "replica $i did not answer on port $(replica_port "$i") (see $state/logs/replica-$i.log)"
+  done
+  start_nginx
+  wait_until 10 http_ok "$port" || die "nginx did not answer on port $port (see $state/logs/nginx-error.log)"
+  status
+}
+
+down() {
+  [ -d "$state/pids" ] || { echo "cluster: nothing started on port $port"; return 0; }
+  local n; n=$(started_replicas)
+  local pid i
+  # The front first (no new requests), then the replicas, Redis last (its AOF is fsynced on exit).
+  pid=$(pid_of nginx nginx); [ -n "$pid" ] && stop_pid nginx "$pid"
+  for ((i = 1; i <= n; i++)); do
+    pid=$(pid_of "replica-$i" featureline-server); [ -n "$pid" ] && stop_pid "replica $i" "$pid"
+  done
+  pid=$(pid_of redis redis-server); [ -n "$pid" ] && stop_pid redis "$pid"
+  rm -rf "$state/pids"
+  [ "$wipe" = 1 ] && rm -rf "$state/redis"
+  echo "cluster: down (port $port)$([ "$wipe" = 1 ] && echo ", Redis data wiped")"
+}
+
+"$command"

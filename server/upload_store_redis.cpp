@@ -1,0 +1,206 @@
+// The Redis backend of UploadStore (server/upload_store.h), with Debian's hiredis (synchronous).
+#include <hiredis/hiredis.h>
+
+#include <mutex>
+#include <vector>
+
+#include "server/upload_store.h"
+
+namespace featureline::server {
+namespace {
+
+struct ReplyDeleter {
+  void operator()(redisReply* r) const { freeReplyObject(r); }
+};
+using Reply = std::unique_ptr<redisReply, ReplyDeleter>;
+struct ContextDeleter {
+  void operator()(redisContext* c) const { redisFree(c); }
+};
+using Context = std::unique_ptr<redisContext, ContextDeleter>;
+
+timeval to_timeval(std::chrono::milliseconds ms) { return {time_t(ms.count() / 1000), suseconds_t(ms.count() % 1000 * 1000)}; }
+
+bool is_error(const redisReply* r) { return r->type == REDIS_REPLY_ERROR; }
+// "OOM command not allowed when used memory > 'maxmemory'", also inside MULTI ("EXECABORT ... OOM").
+bool is_out_of_memory(const redisReply* r) { return is_error(r) && std::string(r->str, r->len).find("OOM") != std::string::npos; }
+
+// One command as arguments (binary-safe: the upload's bytes are passed by pointer, not copied).
+struct Command {
+  std::vector<const char*> argv;
+  std::vector<std::size_t> lengths;
+  Command(std::initializer_list<std::string_view> args) {
+    for (auto a : args) argv.push_back(a.data()), lengths.push_back(a.size());
+  }
+};
+
+class RedisStore final : public UploadStore {
+ public:
+  RedisStore(RedisAddress address, StoreOptions options) : address_(std::move(address)), options_(std::move(options)) {
+    try {
+      release(connect());  // checks the eviction policy now when Redis is up; later otherwise
+    } catch (const StoreUnavailableError&) {
+      // Redis may start after the server: every operation connects on demand (503 meanwhile).
+    }
+  }
+
+  void put(const std::string& id, const StoredUpload& upload) override {
+    if (!is_mesh_id(id)) throw std::invalid_argument("not a mesh id: " + id);
+    const std::string meta = upload_meta_json(upload), ttl = std::to_string(options_.idle_ttl.count()),
+                      known_ttl = std::to_string((options_.idle_ttl + options_.tombstone_ttl).count());
+    const std::string key = upload_key(id), known = known_key(id), deleted = deleted_key(id);
+    // One transaction: the upload never exists without its expiry (it would never expire).
+    auto replies = run({{"MULTI"},
+                        {"HSET", key, "meta", meta, "data", upload.bytes},
+                        {"EXPIRE", key, ttl},
+                        {"SET", known, "1", "EX", known_ttl},
+                        {"DEL", deleted},
+                        {"EXEC"}});
+    for (const auto& r : replies) {
+      if (is_out_of_memory(r.get()))
+        throw StoreFullError("the upload store (" + describe() + ") is full: Redis refused the upload at its maxmemory limit");
+    }
+    const auto& exec = replies.back();
+    if (is_error(exec.get()) || exec->type != REDIS_REPLY_ARRAY)
+      throw StoreUnavailableError("the upload store (" + describe() + ") refused the upload: " + text(exec.get()));
+    for (std::size_t i = 0; i < exec->elements; ++i)
+      if (is_error(exec->element[i])) throw StoreUnavailableError("the upload store (" + describe() + ") failed: " + text(exec->element[i]));
+  }
+
+  StoreLookup get(const std::string& id) override {
+    StoreLookup found;
+    if (!is_mesh_id(id)) return found;
+    auto replies = run({{"HMGET", upload_key(id), "meta", "data"}, {"EXISTS", deleted_key(id)}, {"EXISTS", known_key(id)}});
+    const redisReply* fields = replies[0].get();
+    if (is_error(fields) || fields->type != REDIS_REPLY_ARRAY || fields->elements != 2)
+      throw StoreUnavailableError("the upload store (" + describe() + ") failed: " + text(fields));
+    if (fields->element[0]->type == REDIS_REPLY_STRING && fields->element[1]->type == REDIS_REPLY_STRING) {
+      StoredUpload upload;
+      const std::size_t length = parse_upload_meta({fields->element[0]->str, fields->element[0]->len}, id, upload);
+      if (length != fields->element[1]->len)
+        throw StoreUnavailableError("the stored upload of mesh " + id + " is damaged (" + std::to_string(fields->element[1]->len) +
+                                    " bytes instead of " + std::to_string(length) + ")");
+      upload.bytes.assign(fields->element[1]->str, fields->element[1]->len);
+      found.upload = std::move(upload);
+    } else if (replies[1]->type == REDIS_REPLY_INTEGER && replies[1]->integer == 1) {
+      found.why = StoreMiss::deleted;
+    } else if (replies[2]->type == REDIS_REPLY_INTEGER && replies[2]->integer == 1) {
+      found.why = StoreMiss::expired;  // known, not deleted, and its upload key timed out
+    }
+    return found;
+  }
+
+  bool touch(const std::string& id) override {
+    if (!is_mesh_id(id)) return false;
+    auto replies = run({{"EXPIRE", upload_key(id), std::to_string(options_.idle_ttl.count())},
+                        {"EXPIRE", known_key(id), std::to_string((options_.idle_ttl + options_.tombstone_ttl).count())}});
+    if (replies[0]->type != REDIS_REPLY_INTEGER) throw StoreUnavailableError("the upload store (" + describe() + ") failed: " + text(replies[0].get()));
+    return replies[0]->integer == 1;
+  }
+
+  bool erase(const std::string& id) override {
+    if (!is_mesh_id(id)) return false;
+    auto removed = run({{"DEL", upload_key(id)}});
+    if (removed[0]->type != REDIS_REPLY_INTEGER || removed[0]->integer == 0) return false;
+    // DEL is allowed at maxmemory; the tombstone is small but may be refused then (the 404 would
+    // then say "unknown" instead of "deleted": nothing is lost).
+    run({{"DEL", known_key(id)}, {"SET", deleted_key(id), "1", "EX", std::to_string(options_.tombstone_ttl.count())}});
+    return true;
+  }
+
+  std::size_t expire_idle() override { return 0; }  // Redis expires the keys itself
+  std::size_t bytes() const override { return 0; }
+  bool shared() const override { return true; }
+  std::string describe() const override {
+    return "redis " + address_.host + ":" + std::to_string(address_.port) + "/" + std::to_string(address_.db);
+  }
+
+ private:
+  std::string upload_key(const std::string& id) const { return address_.key_prefix + ":upload:" + id; }
+  std::string known_key(const std::string& id) const { return address_.key_prefix + ":known:" + id; }
+  std::string deleted_key(const std::string& id) const { return address_.key_prefix + ":deleted:" + id; }
+
+  static std::string text(const redisReply* r) {
+    if (r->type == REDIS_REPLY_ERROR || r->type == REDIS_REPLY_STATUS || r->type == REDIS_REPLY_STRING) return std::string(r->str, r->len);
+    return "unexpected reply type " + std::to_string(r->type);
+  }
+
+  [[noreturn]] void unavailable(const std::string& detail) const {
+    throw StoreUnavailableError("the upload store (" + describe() + ") is unreachable: " + detail);
+  }
+
+  Context connect() const {
+    Context c(redisConnectWithTimeout(address_.host.c_str(), address_.port, to_timeval(address_.timeout)));
+    if (!c) unavailable("out of memory");
+    if (c->err) unavailable(c->errstr);
+    redisSetTimeout(c.get(), to_timeval(address_.timeout));
+    auto command = [&](Command cmd) {
+      Reply r(static_cast<redisReply*>(redisCommandArgv(c.get(), int(cmd.argv.size()), cmd.argv.data(), cmd.lengths.data())));
+      if (!r) unavailable(c->errstr);
+      return r;
+    };
+    if (address_.db != 0) {
+      const std::string db = std::to_string(address_.db);
+      if (auto r = command({"SELECT", db}); is_error(r.get())) unavailable("SELECT " + db + ": " + text(r.get()));
+    }
+    // An evicting policy would drop uploads without a word: refuse such a Redis.
+    auto policy = command({"CONFIG", "GET", "maxmemory-policy"});
+    if (policy->type == REDIS_REPLY_ARRAY && policy->elements == 2 && policy->element[1]->type == REDIS_REPLY_STRING) {
+      const std::string value(policy->element[1]->str, policy->element[1]->len);
+      if (value != "noeviction")
+        throw std::runtime_error("Redis at " + describe() + " evicts keys (maxmemory-policy " + value +
+                                 "), which would lose uploads silently; configure maxmemory-policy noeviction");
+    }
+    return c;
+  }
+
+  Context acquire() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!idle_.empty()) {
+        Context c = std::move(idle_.back());
+        idle_.pop_back();
+        return c;
+      }
+    }
+    try {
+      return connect();
+    } catch (const std::runtime_error& e) {
+      if (dynamic_cast<const StoreUnavailableError*>(&e) != nullptr) throw;
+      throw StoreUnavailableError(e.what());  // a misconfigured Redis found after start: 503, not a crash
+    }
+  }
+  void release(Context c) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (idle_.size() < 16) idle_.push_back(std::move(c));
+  }
+
+  // Pipelines the commands on one connection and returns every reply. A connection that failed
+  // is dropped (the next call reconnects); Redis' error replies are returned to the caller.
+  std::vector<Reply> run(std::initializer_list<Command> commands) {
+    Context c = acquire();
+    for (const auto& cmd : commands)
+      if (redisAppendCommandArgv(c.get(), int(cmd.argv.size()), const_cast<const char**>(cmd.argv.data()), cmd.lengths.data()) != REDIS_OK)
+        unavailable(c->errstr);
+    std::vector<Reply> replies;
+    for (std::size_t i = 0; i < commands.size(); ++i) {
+      void* reply = nullptr;
+      if (redisGetReply(c.get(), &reply) != REDIS_OK || reply == nullptr) unavailable(c->err ? c->errstr : "no reply");
+      replies.emplace_back(static_cast<redisReply*>(reply));
+    }
+    release(std::move(c));
+    return replies;
+  }
+
+  const RedisAddress address_;
+  const StoreOptions options_;
+  std::mutex mutex_;
+  std::vector<Context> idle_;  // open connections not in use (hiredis contexts are not thread-safe)
+};
+
+}  // namespace
+
+std::unique_ptr<UploadStore> open_redis_store(const RedisAddress& address, StoreOptions options) {
+  return std::make_unique<RedisStore>(address, std::move(options));
+}
+
+}  // namespace featureline::server

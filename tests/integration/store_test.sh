@@ -1,0 +1,141 @@
+#!/usr/bin/env bash
+# Durable sessions of one featureline-server (issue 11), the real binary driven with curl:
+# restarted with the same --data-dir it keeps its sessions (identical lines) and remembers
+# deletes; eviction costs a rebuild, not the session; a full store (--store-max-mb) and an
+# unreachable Redis answer 503 with their codes and keep nothing; idle uploads expire from the
+# store and the 404 says so, also after a restart.
+#
+#   SERVER=build/server/featureline-server SHARED=../shared bash tests/integration/store_test.sh
+#
+# Prints "ok   NAME" / "FAIL NAME" lines and "N passed, N failed"; exits 1 on any failure.
+set -u
+
+HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+ROOT="$(cd "$HERE/../.." && pwd)"
+cd "$ROOT" || exit 1
+SERVER=${SERVER:-$ROOT/build/server/featureline-server}
+SHARED=${SHARED:-$ROOT/../shared}
+MESHES="$SHARED/data/meshes"
+VR="$HERE/validate_response.mjs"
+JOBS=${JOBS:-$(nproc 2>/dev/null || echo 2)}
+# shellcheck source=lib.sh
+source "$HERE/lib.sh"
+
+for tool in curl jq node ss; do command -v "$tool" >/dev/null || { echo "FAIL $tool is not installed"; exit 1; }; done
+[ -x "$SERVER" ] || { echo "FAIL no server binary at $SERVER"; exit 1; }
+for f in dragon_25k.off armadillo_29k.obj bunny_closed.off; do
+  [ -f "$MESHES/$f" ] || { echo "FAIL missing test mesh $MESHES/$f"; exit 1; }
+done
+FACTOR=$(time_factor "$SERVER")
+CURL_MAX=$((60 * FACTOR))
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/featureline-store.XXXXXX")
+T=$TMP
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+DATA="$T/data"
+
+upload() {  # upload SERVER_NAME FILE -> ID
+  http "$T/up.json" --data-binary @"$2" -H 'Content-Type: application/octet-stream' "${SRV_BASE[$1]}/v1/meshes"
+  ID=$(jq -r '.mesh_id // empty' "$T/up.json" 2>/dev/null)
+}
+line() {  # line SERVER_NAME ID KEYS -> LINE (the answer without timings), STATUS
+  http "$T/line.json" -X POST -H 'Content-Type: application/json' -d "{\"keys\": $3}" "${SRV_BASE[$1]}/v1/meshes/$2/feature-lines"
+  LINE=$(jq -c 'del(.stats.timings_ms)' "$T/line.json" 2>/dev/null)
+}
+metric() { curl -s --max-time 5 "${SRV_BASE[$1]}/metrics" | awk -v m="$2" '$1 == m { print $2 }'; }
+
+# ---- a restart with the same --data-dir keeps the sessions ---------------------------------------
+start_server a --data-dir "$DATA" --quiet || exit 1
+check "the banner names the store" grep -q "uploads kept in dir:$DATA" "$T/a.out"
+upload a samples/ridge_field.off; RIDGE=$ID
+line a "$RIDGE" '[701, 963, 1184]'; check_eq "a line before the restart" "$STATUS" 200
+RIDGE_LINE=$LINE
+http "$T/desc1.json" "${SRV_BASE[a]}/v1/meshes/$RIDGE"
+upload a "$MESHES/dragon_25k.off"; DRAGON=$ID
+check "the upload is on disk, whole, with no temporary file left" \
+  bash -c "[ -s '$DATA/uploads/$RIDGE' ] && [ -z \"\$(ls -A '$DATA/tmp')\" ]"
+stop_server a
+check_eq "the first server stops on SIGTERM" "$STOP_RC" 0
+
+start_server b --data-dir "$DATA" --quiet || exit 1
+line b "$RIDGE" '[701, 963, 1184]'
+check_eq "after the restart the session answers" "$STATUS" 200
+check_eq "after the restart the line is identical" "$LINE" "$RIDGE_LINE"
+http "$T/desc2.json" "${SRV_BASE[b]}/v1/meshes/$RIDGE"
+expect "after the restart the description answers" 200 - GET "/v1/meshes/$RIDGE" "$T/desc2.json"
+check_eq "the description is the same (but its expiry countdown)" \
+  "$(jq -c 'del(.expires_in_s, .load_ms, .timings_ms)' "$T/desc2.json")" "$(jq -c 'del(.expires_in_s, .load_ms, .timings_ms)' "$T/desc1.json")"
+check_eq "one rebuild from the store" "$(metric b featureline_store_rebuilds_total)" 1
+http "$T/del.json" -X DELETE "${SRV_BASE[b]}/v1/meshes/$DRAGON"
+check_eq "DELETE: 204" "$STATUS" 204
+check "DELETE removes the stored upload" test ! -e "$DATA/uploads/$DRAGON"
+http "$T/gone.json" "${SRV_BASE[b]}/v1/meshes/$DRAGON"
+expect "the deleted mesh" 404 not_found GET "/v1/meshes/$DRAGON" "$T/gone.json"
+check "its 404 says deleted" grep -q "was deleted" "$T/gone.json"
+http "$T/del2.json" -X DELETE "${SRV_BASE[b]}/v1/meshes/$DRAGON"
+check_eq "DELETE again: 404" "$STATUS" 404
+stop_server b
+start_server c --data-dir "$DATA" --quiet || exit 1
+http "$T/gone2.json" "${SRV_BASE[c]}/v1/meshes/$DRAGON"
+check "after another restart the 404 still says deleted" grep -q "was deleted" "$T/gone2.json"
+http "$T/unknown.json" "${SRV_BASE[c]}/v1/meshes/0123456789abcdef0123456789abcdef"
+check "an id never issued: 'no mesh with id'" grep -q "no mesh with id" "$T/unknown.json"
+http "$T/traversal.json" "${SRV_BASE[c]}/v1/meshes/..%2F..%2Fetc%2Fpasswd"
+check_eq "a path-like id is just unknown" "$STATUS" 404
+stop_server c
+
+# ---- eviction costs a rebuild, not the session ------------------------------------------------------
+# dragon_25k and armadillo_29k prepared take about 4-5 MB each: an 8 MB cache holds one.
+start_server small --data-dir "$T/data2" --cache-mb 8 --quiet || exit 1
+upload small "$MESHES/dragon_25k.off"; FIRST=$ID
+line small "$FIRST" '[10, 200, 400]'; FIRST_LINE=$LINE
+upload small "$MESHES/armadillo_29k.obj"
+check "the second upload evicted the first" test "$(metric small featureline_cache_evictions_total)" -ge 1
+line small "$FIRST" '[10, 200, 400]'
+check_eq "the evicted session answers (rebuilt)" "$STATUS" 200
+check_eq "with an identical line" "$LINE" "$FIRST_LINE"
+check "it was rebuilt from the store" test "$(metric small featureline_store_rebuilds_total)" -ge 1
+stop_server small
+
+# ---- a full store and an unreachable Redis: 503, nothing kept -------------------------------------------
+start_server full --data-dir "$T/data3" --store-max-mb 2 --quiet || exit 1
+upload full samples/ridge_field.off
+check_eq "a small upload fits the 2 MiB store" "$STATUS" 201
+upload full "$MESHES/bunny_closed.off"
+expect "an upload the store cannot hold (2.7 MB)" 503 storage_full POST /v1/meshes "$T/up.json"
+check "it says Retry-After" test -n "$(header "$T/up.json" Retry-After)"
+check_eq "nothing of it is kept (one upload on disk)" "$(ls "$T/data3/uploads" | wc -l)" 1
+check_eq "no session of it is cached" "$(metric full featureline_cache_entries)" 1
+stop_server full
+
+free_port=""
+for _ in $(seq 1 50); do p=$((20000 + RANDOM % 40000)); ss -Htln "sport = :$p" | grep -q . || { free_port=$p; break; }; done
+start_server noredis --store "redis://127.0.0.1:$free_port" --quiet || exit 1
+upload noredis samples/ridge_field.off
+expect "an upload while Redis is unreachable" 503 storage_unavailable POST /v1/meshes "$T/up.json"
+http "$T/nr.json" "${SRV_BASE[noredis]}/v1/meshes/0123456789abcdef0123456789abcdef"
+expect "a lookup that needs Redis while it is unreachable" 503 storage_unavailable GET /v1/meshes/0123456789abcdef0123456789abcdef "$T/nr.json"
+http "$T/nrh.json" "${SRV_BASE[noredis]}/healthz"
+check_eq "the server itself stays up (healthz 200)" "$STATUS" 200
+stop_server noredis
+
+# ---- idle uploads expire from the store; the 404 says so, also after a restart ----------------------------
+start_server ttl --data-dir "$T/data4" --ttl-s 2 --quiet || exit 1
+upload ttl samples/ridge_field.off; SHORT=$ID
+# The store keeps an upload 1 s beyond the 2 s TTL and is swept every 5 s: poll (bounded).
+for _ in $(seq 1 $((40 * FACTOR))); do
+  [ -e "$T/data4/uploads/$SHORT" ] || break
+  sleep 0.5
+done
+check "the idle upload left the store" test ! -e "$T/data4/uploads/$SHORT"
+http "$T/exp.json" "${SRV_BASE[ttl]}/v1/meshes/$SHORT"
+expect "the expired mesh" 404 not_found GET "/v1/meshes/$SHORT" "$T/exp.json"
+check "its 404 says expired" grep -q "expired after 2 s without use" "$T/exp.json"
+stop_server ttl
+start_server ttl2 --data-dir "$T/data4" --ttl-s 2 --quiet || exit 1
+http "$T/exp2.json" "${SRV_BASE[ttl2]}/v1/meshes/$SHORT"
+check "after a restart the 404 still says expired" grep -q "expired after" "$T/exp2.json"
+stop_server ttl2
+
+run_validations
+finish

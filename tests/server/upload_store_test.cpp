@@ -1,0 +1,455 @@
+// The upload store (issue 11): the directory backend, the Redis backend against a real
+// redis-server started here on a free loopback port, and DurableSessions (rebuild on a miss,
+// restarts, single flight, what a 404 says, nothing kept when the store refuses).
+#include <gtest/gtest.h>
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "engine/prepared_mesh.h"
+#include "server/session_cache.h"
+#include "server/upload_store.h"
+#include "tests/support/synthetic_meshes.h"
+
+namespace featureline::server {
+namespace {
+
+namespace fs = std::filesystem;
+using SystemClock = std::chrono::system_clock;
+
+// A fresh folder under the system's temporary folder, removed afterwards.
+struct TempFolder {
+  fs::path path;
+  TempFolder() {
+    char pattern[] = "/tmp/upload_store_test.XXXXXX";
+    path = mkdtemp(pattern);
+  }
+  ~TempFolder() { fs::remove_all(path); }
+};
+
+StoredUpload upload_of(std::string bytes, MeshFormat format = MeshFormat::off) {
+  StoredUpload u;
+  u.bytes = std::move(bytes);
+  u.format = format;
+  u.uploaded_at_unix_s = 1764576000;
+  return u;
+}
+
+// Bytes no text-based encoding would survive unchanged: NULs, newlines, high bytes.
+std::string binary_bytes(std::size_t n) {
+  std::string s(n, '\0');
+  for (std::size_t i = 0; i < n; ++i) s[i] = char((i * 131 + 7) & 0xFF);
+  return s;
+}
+
+struct FakeWallClock {
+  SystemClock::time_point now = SystemClock::time_point(std::chrono::seconds(1764576000));
+  std::function<SystemClock::time_point()> fn() {
+    return [this] { return now; };
+  }
+};
+
+const std::string kId = "0123456789abcdef0123456789abcdef";
+const std::string kOtherId = "fedcba9876543210fedcba9876543210";
+
+// ---- directory ------------------------------------------------------------------------------
+
+TEST(DirectoryStore, KeepsBytesFormatAndTimeExactly) {
+  TempFolder dir;
+  auto store = open_directory_store(dir.path, {});
+  store->put(kId, upload_of(binary_bytes(100000), MeshFormat::glb));
+  const auto found = store->get(kId);
+  ASSERT_TRUE(found.upload.has_value());
+  EXPECT_EQ(found.upload->bytes, binary_bytes(100000));
+  EXPECT_EQ(found.upload->format, MeshFormat::glb);
+  EXPECT_EQ(found.upload->uploaded_at_unix_s, 1764576000);
+  EXPECT_TRUE(fs::is_empty(dir.path / "tmp"));  // the temporary file became the upload
+  EXPECT_EQ(store->bytes(), fs::file_size(dir.path / "uploads" / kId));
+}
+
+TEST(DirectoryStore, SurvivesReopeningAndDropsInterruptedWrites) {
+  TempFolder dir;
+  open_directory_store(dir.path, {})->put(kId, upload_of("OFF\n3 1 0\n"));
+  std::ofstream(dir.path / "tmp" / (kId + ".half")) << "a write a crash interrupted";
+  auto reopened = open_directory_store(dir.path, {});
+  const auto found = reopened->get(kId);
+  ASSERT_TRUE(found.upload.has_value());
+  EXPECT_EQ(found.upload->bytes, "OFF\n3 1 0\n");
+  EXPECT_TRUE(fs::is_empty(dir.path / "tmp"));
+  EXPECT_EQ(reopened->bytes(), fs::file_size(dir.path / "uploads" / kId));
+}
+
+TEST(DirectoryStore, TellsDeletedFromUnknown) {
+  TempFolder dir;
+  auto store = open_directory_store(dir.path, {});
+  store->put(kId, upload_of("x"));
+  EXPECT_TRUE(store->touch(kId));
+  EXPECT_TRUE(store->erase(kId));
+  EXPECT_FALSE(store->erase(kId));
+  EXPECT_FALSE(store->touch(kId));
+  EXPECT_FALSE(store->get(kId).upload.has_value());
+  EXPECT_EQ(store->get(kId).why, StoreMiss::deleted);
+  EXPECT_EQ(store->get(kOtherId).why, StoreMiss::unknown);
+  EXPECT_EQ(store->bytes(), 0u);
+}
+
+TEST(DirectoryStore, ExpiresIdleUploadsAndLaterForgetsThem) {
+  TempFolder dir;
+  FakeWallClock clock;
+  StoreOptions options;
+  options.idle_ttl = std::chrono::seconds(60);
+  options.tombstone_ttl = std::chrono::seconds(600);
+  options.now = clock.fn();
+  auto store = open_directory_store(dir.path, options);
+  store->put(kId, upload_of("a"));
+  store->put(kOtherId, upload_of("b"));
+  clock.now += std::chrono::seconds(50);
+  store->touch(kId);  // used at 50 s: expires at 110 s; the other one at 60 s
+  clock.now += std::chrono::seconds(20);
+  EXPECT_EQ(store->expire_idle(), 1u);
+  EXPECT_TRUE(store->get(kId).upload.has_value());
+  EXPECT_EQ(store->get(kOtherId).why, StoreMiss::expired);
+  clock.now += std::chrono::seconds(41);
+  EXPECT_EQ(store->expire_idle(), 1u);
+  EXPECT_EQ(store->get(kId).why, StoreMiss::expired);
+  clock.now += std::chrono::seconds(601);  // past the tombstone period: no longer remembered
+  store->expire_idle();
+  EXPECT_EQ(store->get(kId).why, StoreMiss::unknown);
+}
+
+TEST(DirectoryStore, RefusesBeyondItsSizeLimitAndKeepsNothingOfTheRefused) {
+  TempFolder dir;
+  StoreOptions options;
+  options.max_bytes = 1000;
+  auto store = open_directory_store(dir.path, options);
+  store->put(kId, upload_of(std::string(600, 'a')));
+  EXPECT_THROW(store->put(kOtherId, upload_of(std::string(600, 'b'))), StoreFullError);
+  EXPECT_EQ(store->get(kOtherId).why, StoreMiss::unknown);
+  EXPECT_TRUE(fs::is_empty(dir.path / "tmp"));
+  ASSERT_TRUE(store->erase(kId));
+  EXPECT_NO_THROW(store->put(kOtherId, upload_of(std::string(600, 'b'))));
+}
+
+TEST(DirectoryStore, AVanishedFolderIsUnavailableNotEmpty) {
+  TempFolder dir;
+  auto store = open_directory_store(dir.path / "store", {});
+  store->put(kId, upload_of("x"));
+  fs::remove_all(dir.path / "store");
+  EXPECT_THROW(store->get(kId), StoreUnavailableError);
+  EXPECT_THROW(store->put(kOtherId, upload_of("y")), StoreUnavailableError);
+  std::ofstream(dir.path / "a_file") << "not a folder";
+  EXPECT_THROW(open_directory_store(dir.path / "a_file", {}), StoreUnavailableError);
+}
+
+TEST(DirectoryStore, RefusesDamagedRecordsAndForeignIds) {
+  TempFolder dir;
+  auto store = open_directory_store(dir.path, {});
+  std::ofstream(dir.path / "uploads" / kId) << "{\"format\": \"off\", \"uploaded_at\": 1, \"bytes\": 99}\nshort";
+  EXPECT_THROW(store->get(kId), StoreUnavailableError);
+  EXPECT_EQ(store->get("../uploads/" + kId).why, StoreMiss::unknown);
+  EXPECT_THROW(store->put("../../etc/passwd", upload_of("x")), std::invalid_argument);
+}
+
+TEST(UploadStoreUrl, ParsesRedisAndFolderForms) {
+  TempFolder dir;
+  EXPECT_EQ(open_upload_store("dir:" + dir.path.string(), {})->describe(), "directory " + dir.path.string());
+  EXPECT_EQ(open_upload_store(dir.path.string(), {})->describe(), "directory " + dir.path.string());
+  // Nothing listens on port 1: the store opens (Redis may come later) and says where it points.
+  EXPECT_EQ(open_upload_store("redis://127.0.0.1:1/2", {})->describe(), "redis 127.0.0.1:1/2");
+  EXPECT_THROW(open_upload_store("redis://127.0.0.1:notaport", {}), std::invalid_argument);
+  EXPECT_THROW(open_upload_store("redis://:6379", {}), std::invalid_argument);
+}
+
+// ---- Redis ------------------------------------------------------------------------------------
+
+int free_loopback_port() {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  addr.sin_port = 0;
+  socklen_t len = sizeof addr;
+  if (bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
+    close(fd);
+    return -1;
+  }
+  close(fd);
+  return ntohs(addr.sin_port);
+}
+
+bool port_answers(int port) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  addr.sin_port = htons(std::uint16_t(port));
+  const bool ok = connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
+  close(fd);
+  return ok;
+}
+
+// A real redis-server on a free loopback port, without persistence, stopped by its PID.
+class RedisProcess {
+ public:
+  explicit RedisProcess(std::string policy = "noeviction", int port = 0) : port_(port != 0 ? port : free_loopback_port()) {
+    const std::string port_text = std::to_string(port_);
+    pid_ = fork();
+    if (pid_ == 0) {
+      const int null = open("/dev/null", O_WRONLY);  // Redis' start-up banner is not test output
+      dup2(null, 1);
+      execl("/usr/bin/redis-server", "redis-server", "--port", port_text.c_str(), "--bind", "127.0.0.1", "--save", "",
+            "--appendonly", "no", "--maxmemory", "8mb", "--maxmemory-policy", policy.c_str(), "--loglevel", "warning",
+            "--dir", "/tmp", static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    for (int i = 0; i < 100 && !port_answers(port_); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ~RedisProcess() { stop(); }
+  void stop() {
+    if (pid_ <= 0) return;
+    kill(pid_, SIGTERM);
+    int status = 0;
+    for (int i = 0; i < 100 && waitpid(pid_, &status, WNOHANG) == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (waitpid(pid_, &status, WNOHANG) == 0) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, &status, 0);
+    }
+    pid_ = -1;
+  }
+  bool up() const { return pid_ > 0 && port_answers(port_); }
+  int port() const { return port_; }
+
+ private:
+  int port_;
+  pid_t pid_ = -1;
+};
+
+RedisAddress address_of(int port) {
+  RedisAddress a;
+  a.port = port;
+  a.key_prefix = "test";
+  a.timeout = std::chrono::milliseconds(1000);
+  return a;
+}
+
+TEST(RedisStore, ReplicasShareUploadsAndDeletes) {
+  RedisProcess redis;
+  ASSERT_TRUE(redis.up()) << "redis-server did not start (scripts/setup.sh installs it)";
+  auto replica_a = open_redis_store(address_of(redis.port()), {});
+  auto replica_b = open_redis_store(address_of(redis.port()), {});
+  replica_a->put(kId, upload_of(binary_bytes(300000), MeshFormat::ply));
+  const auto found = replica_b->get(kId);
+  ASSERT_TRUE(found.upload.has_value());
+  EXPECT_EQ(found.upload->bytes, binary_bytes(300000));
+  EXPECT_EQ(found.upload->format, MeshFormat::ply);
+  EXPECT_EQ(found.upload->uploaded_at_unix_s, 1764576000);
+  EXPECT_TRUE(replica_b->erase(kId));
+  EXPECT_FALSE(replica_a->erase(kId));
+  EXPECT_EQ(replica_a->get(kId).why, StoreMiss::deleted);
+  EXPECT_EQ(replica_a->get(kOtherId).why, StoreMiss::unknown);
+}
+
+TEST(RedisStore, IdleUploadsExpireAndAreReportedExpired) {
+  RedisProcess redis;
+  ASSERT_TRUE(redis.up());
+  StoreOptions options;
+  options.idle_ttl = std::chrono::seconds(1);
+  auto store = open_redis_store(address_of(redis.port()), options);
+  store->put(kId, upload_of("x"));
+  StoreLookup found = store->get(kId);
+  // Redis expires the key itself; wait for it (bounded: 50 x 100 ms).
+  for (int i = 0; i < 50 && found.upload; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    found = store->get(kId);
+  }
+  EXPECT_FALSE(found.upload.has_value());
+  EXPECT_EQ(found.why, StoreMiss::expired);
+}
+
+TEST(RedisStore, FullRedisRefusesWithStoreFullAndKeepsWhatItHad) {
+  RedisProcess redis;  // maxmemory 8 MB, noeviction
+  ASSERT_TRUE(redis.up());
+  auto store = open_redis_store(address_of(redis.port()), {});
+  std::vector<std::string> kept;
+  bool refused = false;
+  for (int i = 0; i < 40 && !refused; ++i) {
+    const std::string id = random_session_id();
+    try {
+      store->put(id, upload_of(binary_bytes(1 << 20)));
+      kept.push_back(id);
+    } catch (const StoreFullError&) {
+      refused = true;
+      EXPECT_EQ(store->get(id).why, StoreMiss::unknown);  // nothing of the refused upload
+    }
+  }
+  EXPECT_TRUE(refused);
+  EXPECT_GE(kept.size(), 3u);
+  for (const auto& id : kept) EXPECT_TRUE(store->get(id).upload.has_value()) << id;
+}
+
+TEST(RedisStore, UnreachableIsUnavailableAndReconnectsWhenRedisReturns) {
+  const int port = free_loopback_port();
+  auto store = open_redis_store(address_of(port), {});  // nothing listens yet
+  EXPECT_THROW(store->put(kId, upload_of("x")), StoreUnavailableError);
+  EXPECT_THROW(store->get(kId), StoreUnavailableError);
+  {
+    RedisProcess redis("noeviction", port);
+    ASSERT_TRUE(redis.up());
+    store->put(kId, upload_of("x"));
+    EXPECT_TRUE(store->get(kId).upload.has_value());
+    redis.stop();  // the pooled connection is now dead
+    EXPECT_THROW(store->get(kId), StoreUnavailableError);
+  }
+  RedisProcess again("noeviction", port);
+  ASSERT_TRUE(again.up());
+  EXPECT_EQ(store->get(kId).why, StoreMiss::unknown);  // a new, empty Redis: reconnected
+}
+
+TEST(RedisStore, RefusesARedisThatEvictsKeys) {
+  RedisProcess redis("allkeys-lru");
+  ASSERT_TRUE(redis.up());
+  try {
+    open_redis_store(address_of(redis.port()), {});
+    FAIL() << "an evicting Redis was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("maxmemory-policy allkeys-lru"), std::string::npos) << e.what();
+  }
+}
+
+// ---- DurableSessions --------------------------------------------------------------------------
+
+struct Rebuilds {
+  std::atomic<int> count{0};
+  DurableSessions::Rebuild fn() {
+    return [this](std::shared_ptr<const StoredUpload> upload) {
+      ++count;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));  // long enough for waiters to pile up
+      static const auto mesh = prepare_mesh(featureline::testing::make_icosphere(1.0, 1));
+      MeshSession s;
+      s.mesh = mesh;
+      s.format = upload->format;
+      s.bytes = upload->bytes.size();
+      return s;
+    };
+  }
+};
+
+MeshSession fresh_session(std::size_t bytes) {
+  MeshSession s;
+  s.mesh = prepare_mesh(featureline::testing::make_icosphere(1.0, 1));
+  s.bytes = bytes;
+  return s;
+}
+
+TEST(DurableSessions, ARestartCostsARebuildNotTheSession) {
+  TempFolder dir;
+  Rebuilds rebuilds;
+  std::string id;
+  {
+    SessionCache cache({1 << 20, std::chrono::seconds(60)});
+    DurableSessions sessions(cache, open_directory_store(dir.path, {}), rebuilds.fn(), {});
+    id = (*sessions.create(fresh_session(100), upload_of(std::string(100, 'm'))))->id;
+    EXPECT_FALSE(sessions.find(id).rebuilt);
+  }
+  SessionCache cache({1 << 20, std::chrono::seconds(60)});  // the process restarted
+  DurableSessions sessions(cache, open_directory_store(dir.path, {}), rebuilds.fn(), {});
+  const auto found = sessions.find(id);
+  ASSERT_NE(found.session, nullptr);
+  EXPECT_TRUE(found.rebuilt);
+  EXPECT_EQ(found.session->id, id);
+  EXPECT_EQ(found.session->bytes, 100u);
+  EXPECT_EQ(rebuilds.count, 1);
+  EXPECT_FALSE(sessions.find(id).rebuilt);  // cached again
+}
+
+TEST(DurableSessions, ManyWaitersOnAMissingSessionShareOneRebuild) {
+  TempFolder dir;
+  Rebuilds rebuilds;
+  auto store = open_directory_store(dir.path, {});
+  store->put(kId, upload_of("stored"));
+  SessionCache cache({1 << 20, std::chrono::seconds(60)});
+  DurableSessions sessions(cache, std::move(store), rebuilds.fn(), {});
+  std::vector<std::thread> threads;
+  std::atomic<int> answered{0};
+  for (int i = 0; i < 8; ++i)
+    threads.emplace_back([&] { answered += sessions.find(kId).session != nullptr ? 1 : 0; });
+  for (auto& t : threads) t.join();
+  EXPECT_EQ(answered, 8);
+  EXPECT_EQ(rebuilds.count, 1);
+  EXPECT_EQ(sessions.rebuilds(), 1u);
+}
+
+TEST(DurableSessions, EvictionCostsARebuildWithAStoreAndTheSessionWithout) {
+  TempFolder dir;
+  Rebuilds rebuilds;
+  SessionCache cache({150, std::chrono::seconds(60)});  // room for one session of 100 bytes
+  DurableSessions sessions(cache, open_directory_store(dir.path, {}), rebuilds.fn(), {});
+  const auto first = (*sessions.create(fresh_session(100), upload_of(std::string(100, 'a'))))->id;
+  sessions.create(fresh_session(100), upload_of(std::string(100, 'b')));  // evicts the first
+  EXPECT_TRUE(sessions.find(first).rebuilt);
+
+  SessionCache memory_only({150, std::chrono::seconds(60)});
+  DurableSessions no_store(memory_only, nullptr, rebuilds.fn(), {});
+  const auto lost = (*no_store.create(fresh_session(100), upload_of("a")))->id;
+  no_store.create(fresh_session(100), upload_of("b"));
+  const auto found = no_store.find(lost);
+  EXPECT_EQ(found.session, nullptr);
+  EXPECT_EQ(found.why, DurableSessions::Gone::evicted);
+}
+
+TEST(DurableSessions, DeleteRemovesTheStoredUploadAndIsReportedDeleted) {
+  TempFolder dir;
+  Rebuilds rebuilds;
+  SessionCache cache({1 << 20, std::chrono::seconds(60)});
+  DurableSessions sessions(cache, open_directory_store(dir.path, {}), rebuilds.fn(), {});
+  const auto id = (*sessions.create(fresh_session(10), upload_of("x")))->id;
+  ASSERT_TRUE(sessions.erase(id, nullptr));
+  EXPECT_FALSE(fs::exists(dir.path / "uploads" / id));
+  auto why = DurableSessions::Gone::unknown;
+  EXPECT_FALSE(sessions.erase(id, &why));
+  EXPECT_EQ(why, DurableSessions::Gone::deleted);
+  EXPECT_EQ(sessions.find(id).why, DurableSessions::Gone::deleted);
+  EXPECT_EQ(sessions.find(kOtherId).why, DurableSessions::Gone::unknown);
+  EXPECT_EQ(rebuilds.count, 0);
+}
+
+TEST(DurableSessions, ADeleteOnOneReplicaReachesAnotherReplicasCache) {
+  RedisProcess redis;
+  ASSERT_TRUE(redis.up());
+  Rebuilds rebuilds;
+  SessionCache cache_a({1 << 20, std::chrono::seconds(60)}), cache_b({1 << 20, std::chrono::seconds(60)});
+  DurableSessions replica_a(cache_a, open_redis_store(address_of(redis.port()), {}), rebuilds.fn(), {});
+  DurableSessions replica_b(cache_b, open_redis_store(address_of(redis.port()), {}), rebuilds.fn(), {});
+  const auto id = (*replica_a.create(fresh_session(10), upload_of("shared")))->id;
+  ASSERT_TRUE(replica_b.find(id).rebuilt);  // now cached on both
+  ASSERT_NE(replica_b.find(id).session, nullptr);
+  ASSERT_TRUE(replica_a.erase(id, nullptr));
+  const auto found = replica_b.find(id);  // a cache hit on b, but the store says deleted
+  EXPECT_EQ(found.session, nullptr);
+  EXPECT_EQ(found.why, DurableSessions::Gone::deleted);
+  EXPECT_EQ(cache_b.stats().entries, 0u);
+}
+
+TEST(DurableSessions, AStoreThatRefusesLeavesNoSession) {
+  TempFolder dir;
+  Rebuilds rebuilds;
+  StoreOptions tiny;
+  tiny.max_bytes = 10;
+  SessionCache cache({1 << 20, std::chrono::seconds(60)});
+  DurableSessions sessions(cache, open_directory_store(dir.path, tiny), rebuilds.fn(), {});
+  EXPECT_THROW(sessions.create(fresh_session(10), upload_of(std::string(100, 'x'))), StoreFullError);
+  EXPECT_EQ(cache.stats().entries, 0u);
+}
+
+}  // namespace
+}  // namespace featureline::server
