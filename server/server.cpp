@@ -703,7 +703,7 @@ std::string FeaturelineServer::preload(const std::string& path) {
   MeshSession s;
   s.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   s.format = raw.format;
-  s.mesh = prepare_mesh(std::move(raw), {}, cancel);
+  s.mesh = prepare_mesh(std::move(raw));
   s.bytes = s.mesh->memory_bytes();
   s.pinned = true;  // the bundled sample stays available however long the server runs
   auto stored = impl_->cache.insert(std::move(s));
