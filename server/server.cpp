@@ -516,16 +516,8 @@ struct FeaturelineServer::Impl {
     write_json(res, 200, {{"vertices", h.size()}, {"curvature", h}});
   }
 
-  static std::uint32_t nearest_vertex(const PreparedMesh& mesh, const Eigen::Vector3d& p) {
-    std::uint32_t best = 0;
-    double best_d = HUGE_VAL;
-    for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
-      if (mesh.component[v] < 0) continue;
-      const double d = (mesh.positions[v] - p).squaredNorm();
-      if (d < best_d) best_d = d, best = v;
-    }
-    return best;
-  }
+  // The prepared mesh's k-d tree (engine/vertex_index.h), built once per mesh.
+  static std::uint32_t nearest_vertex(const PreparedMesh& mesh, const Eigen::Vector3d& p) { return mesh.nearest_vertex(p); }
 
   FeatureLineRequest parse_line(const json& j, const PreparedMesh& mesh, const std::string& where) {
     if (!j.is_object()) throw InvalidInputError(where + " must be a JSON object");
@@ -639,8 +631,11 @@ struct FeaturelineServer::Impl {
       if (!mode) throw InvalidInputError("\"mode\" must be \"snap\" or \"remesh\"");
       options_.mode = *mode;
     }
-    const auto lines = parse_line_list(body["lines"], *session->mesh);
-    const auto results = run_lines(session, lines);
+    // Items are line requests (detected here) or lines the client already has (computed once).
+    const auto results = resolve_segmentation_lines(
+        body["lines"], *session->mesh,
+        [&](const json& item, const std::string& where) { return parse_line(item, *session->mesh, where); },
+        [&](const std::vector<FeatureLineRequest>& requests) { return run_lines(session, requests); });
     const SegmentationResult segments = run_on_pool([session, results, options_] {
       return segment_mesh(*session->mesh, results, options_);
     });
