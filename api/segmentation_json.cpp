@@ -23,6 +23,7 @@ json segmentation_to_json(const SegmentationResult& r, SegmentationMode mode) {
                         {"faces", s.faces},
                         {"area", s.area},
                         {"boundary_length", s.boundary_length},
+                        {"color", segment_colour(s.label)},
                         {"bbox", {{"min", s.bbox_min}, {"max", s.bbox_max}}}});
   json out = {{"mode", to_string(mode)},
               {"labels", r.labels},
@@ -54,8 +55,12 @@ Barycentric barycentric_json(const json& w, const std::string& where) {
 
 FeatureLineResult parse_computed_line(const json& item, const PreparedMesh& mesh, const std::string& where) {
   for (auto it = item.begin(); it != item.end(); ++it)
-    if (it.key() != "refined" && it.key() != "closed")
-      throw InvalidInputError("unknown field \"" + where + "." + it.key() + "\" in a computed line (it has \"refined\" and \"closed\")");
+    if (it.key() != "refined" && it.key() != "closed" && it.key() != "keys")
+      throw InvalidInputError("unknown field \"" + where + "." + it.key() +
+                              "\" in a computed line (it has \"refined\", \"closed\" and \"keys\")");
+  // The answer's keys may come along (the line is the refined one; its keys say where it came from).
+  if (const auto keys = item.find("keys"); keys != item.end() && !keys->is_array())
+    throw InvalidInputError(where + ".keys must be an array (the keys the line was detected from)");
   FeatureLineResult line;
   if (const auto closed = item.find("closed"); closed != item.end()) {
     if (!closed->is_boolean()) throw InvalidInputError(where + ".closed must be true or false");
@@ -78,7 +83,8 @@ FeatureLineResult parse_computed_line(const json& item, const PreparedMesh& mesh
   for (std::size_t i = 0; i < faces->size(); ++i) {
     const std::string point = at + ", point " + std::to_string(i);
     const json& f = (*faces)[i];
-    if (!f.is_number_unsigned()) throw InvalidInputError(point + ": the face must be an integer >= 0");
+    if (!f.is_number_integer() || (!f.is_number_unsigned() && f.get<std::int64_t>() < 0))
+      throw InvalidInputError(point + ": the face must be an integer >= 0");
     const auto face = f.get<std::uint64_t>();
     if (face >= mesh.triangles.size())  // checked here too: face ids beyond uint32 must not wrap
       throw InvalidInputError(point + ": face " + std::to_string(face) + " is out of range (the mesh has " +

@@ -27,9 +27,10 @@ nlohmann::json segmentation_to_json(const SegmentationResult& result, Segmentati
 bool is_computed_line(const nlohmann::json& item);
 
 /// A line computed before, as a feature-line answer carries it:
-///   {"refined": {"faces": [f, ...], "barycentric": [[w0, w1, w2], ...]}, "closed": false}
+///   {"refined": {"faces": [f, ...], "barycentric": [[w0, w1, w2], ...]}, "closed": false, "keys": [...]}
 /// The answer's "refined" may be sent whole: its "points" and "length" are accepted and ignored
-/// (positions are recomputed from the faces, as the engine computed them). `where` names the
+/// (positions are recomputed from the faces, as the engine computed them); "keys" (optional, an
+/// array) says where the line came from and is not used. `where` names the
 /// item in errors ("lines[2]").
 /// \throw InvalidInputError naming the field: at least two points, as many barycentric triples
 ///        as faces, face ids in range, barycentric coordinates finite, non-negative, summing to 1
