@@ -22,6 +22,7 @@
 #include "engine/feature_line.h"
 #include "engine/mesh_io.h"
 #include "engine/segmentation.h"
+#include "engine/vertex_index.h"
 
 namespace {
 
@@ -155,6 +156,37 @@ void print_table_memory(const PreparedMesh& mesh) {
               face_tables / faces, double(mesh.vertex_index.memory_bytes()) / faces, double(mesh.memory_bytes()) / faces);
 }
 
+// Point keys ({"point": [x, y, z]}) snapped to the nearest vertex: the prepared mesh's k-d tree
+// against the scan over every vertex the server did before, on points near the surface.
+void print_point_key_times(const PreparedMesh& mesh) {
+  std::vector<Eigen::Vector3d> queries;
+  for (std::size_t v = 0; v < mesh.n_vertices(); v += std::max<std::size_t>(1, mesh.n_vertices() / 1000))
+    queries.push_back(mesh.positions[v] + 0.3 * mesh.statistics.mean_edge_length * Eigen::Vector3d(0.31, -0.52, 0.17));
+  auto start = Clock::now();
+  const VertexIndex index(mesh.positions, mesh.component);
+  const double build_ms = ms_since(start);
+  std::size_t disagree = 0;
+  start = Clock::now();
+  std::vector<std::uint32_t> found;
+  for (const auto& q : queries) found.push_back(mesh.nearest_vertex(q));
+  const double tree_ms = ms_since(start);
+  start = Clock::now();
+  for (std::size_t i = 0; i < queries.size(); ++i) {
+    std::uint32_t best = 0;
+    double best_d = HUGE_VAL;
+    for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
+      if (mesh.component[v] < 0) continue;
+      const double d = (mesh.positions[v] - queries[i]).squaredNorm();
+      if (d < best_d) best_d = d, best = v;
+    }
+    disagree += best != found[i];
+  }
+  const double scan_ms = ms_since(start);
+  std::printf("  point keys: k-d tree %.2f us per key, scan %.1f us per key (%zu keys, %zu disagree); tree built in %.1f ms\n",
+              1000 * tree_ms / double(queries.size()), 1000 * scan_ms / double(queries.size()), queries.size(), disagree,
+              build_ms);
+}
+
 // Detects each cut's loop, then segments along all of them in both modes; false when a loop is missing.
 bool bench_model(const Model& model, int repeat) {
   const std::string path = std::string(FEATURELINE_SHARED_DIR) + "/data/meshes/" + model.file;
@@ -261,6 +293,7 @@ int main(int argc, char** argv) {
     const auto igea = prepare_mesh(read_mesh_file(std::string(FEATURELINE_SHARED_DIR) + "/data/meshes/igea.ply"));
     std::printf("igea.ply: %zu triangles\n", igea->triangles.size());
     print_table_memory(*igea);
+    print_point_key_times(*igea);
   } catch (const std::exception& e) {
     std::printf("igea.ply: error: %s\n", e.what());
     status = 1;

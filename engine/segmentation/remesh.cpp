@@ -6,15 +6,6 @@
 #include <stdexcept>
 
 namespace featureline {
-namespace {
-
-Barycentric barycentric_of(const std::vector<Triangle>& tris, std::uint32_t f, const SurfaceLocation& l) {
-  const auto w = barycentric_in(tris, f, l);
-  if (!w) throw std::logic_error("segmentation: a point is not in the face it was traced in");
-  return *w;
-}
-
-}  // namespace
 
 Remesher::Remesher(const PreparedMesh& mesh, double snap) : mesh_(mesh), snap_(snap), subs_(mesh.triangles.size()) {
   out_.positions = mesh.positions;

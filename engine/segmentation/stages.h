@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -17,6 +18,14 @@
 #include "engine/surface_point.h"
 
 namespace featureline {
+
+/// barycentric_in where face f must hold `l`: an internal invariant of tracing and remeshing
+/// (every point is traced in a face that holds it), so a miss is a logic error, not bad input.
+inline Barycentric barycentric_of(const std::vector<Triangle>& tris, std::uint32_t f, const SurfaceLocation& l) {
+  const auto w = barycentric_in(tris, f, l);
+  if (!w) throw std::logic_error("segmentation: a point is not in the face it was traced in");
+  return *w;
+}
 
 /// Cut edges (edge_key) -> the line that cut each first.
 using CutEdges = std::unordered_map<std::uint64_t, int>;

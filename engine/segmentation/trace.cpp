@@ -7,16 +7,6 @@
 #include "engine/internal/edge_search.h"
 
 namespace featureline {
-namespace {
-
-/// barycentric_in where f must hold `l` (an internal invariant of the tracing).
-Barycentric barycentric_of(const std::vector<Triangle>& tris, std::uint32_t f, const SurfaceLocation& l) {
-  const auto w = barycentric_in(tris, f, l);
-  if (!w) throw std::logic_error("segmentation: a point is not in the face it was traced in");
-  return *w;
-}
-
-}  // namespace
 
 Traced Tracer::trace(const SurfaceLocation& from, const SurfaceLocation& to, std::vector<TraceStep>& steps) const {
   if (same_location(from, to)) return Traced::straight;

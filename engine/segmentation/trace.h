@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "engine/internal/geometry.h"
+#include "engine/segmentation/stages.h"
 #include "engine/surface_point.h"
 
 namespace featureline {
