@@ -37,7 +37,9 @@ void expect_tables_match_openmesh(const PreparedMesh& pm) {
     std::sort(expected.begin(), expected.end());
     const auto id = std::uint32_t(v.idx());
     EXPECT_EQ(std::vector<std::uint32_t>(pm.vertex_faces.begin(id), pm.vertex_faces.end(id)), expected) << "vertex " << id;
-    if (!expected.empty()) EXPECT_EQ(pm.boundary_vertex[id] != 0, mesh.is_boundary(v)) << "vertex " << id;
+    if (!expected.empty()) {
+      EXPECT_EQ(pm.boundary_vertex[id] != 0, mesh.is_boundary(v)) << "vertex " << id;
+    }
   }
 }
 

@@ -589,8 +589,8 @@ TEST(Segmentation, ComputedLineErrorsNameTheField) {
   const Capsule capsule;
   const auto& mesh = *capsule.mesh;
   const std::string faces = std::to_string(mesh.triangles.size());
-  auto item = [](nlohmann::json faces, nlohmann::json barycentric) {
-    return nlohmann::json{{"refined", {{"faces", std::move(faces)}, {"barycentric", std::move(barycentric)}}}};
+  auto item = [](nlohmann::json face_ids, nlohmann::json barycentric) {
+    return nlohmann::json{{"refined", {{"faces", std::move(face_ids)}, {"barycentric", std::move(barycentric)}}}};
   };
   const nlohmann::json w = {0.2, 0.3, 0.5};
   EXPECT_EQ(computed_line_error(mesh, item({1, 2}, {w, w})), "(accepted)");
