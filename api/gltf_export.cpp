@@ -2,6 +2,7 @@
 
 #include <tiny_gltf.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -148,23 +149,23 @@ std::string write(const tinygltf::Model& model, bool binary) {
   return out.str();
 }
 
-// Distinct, saturated colours for segment labels (golden-angle hue steps), linear RGB.
-std::array<double, 4> label_colour(int label) {
-  const double hue = std::fmod(0.61803398875 * label, 1.0) * 6.0;
-  const double x = 1 - std::abs(std::fmod(hue, 2.0) - 1);
-  std::array<double, 3> rgb{};
-  switch (int(hue)) {
-    case 0: rgb = {1, x, 0}; break;
-    case 1: rgb = {x, 1, 0}; break;
-    case 2: rgb = {0, 1, x}; break;
-    case 3: rgb = {0, x, 1}; break;
-    case 4: rgb = {x, 0, 1}; break;
-    default: rgb = {1, 0, x}; break;
-  }
-  return {0.15 + 0.75 * rgb[0], 0.15 + 0.75 * rgb[1], 0.15 + 0.75 * rgb[2], 1.0};
-}
+// glTF material colours are linear; the palette is sRGB (the sRGB transfer function, IEC 61966-2-1).
+double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); }
 
 }  // namespace
+
+std::array<double, 3> segment_colour(int label) {
+  double hue = std::fmod(label * 0.618033988749895, 1.0);
+  if (hue < 0) hue += 1;
+  const double lightness = label % 2 == 0 ? 0.58 : 0.46, saturation = 0.62;
+  // HSL to RGB (the CSS Color 4 formula).
+  const double a = saturation * std::min(lightness, 1 - lightness);
+  auto channel = [&](double n) {
+    const double k = std::fmod(n + hue * 12, 12.0);
+    return lightness - a * std::max(-1.0, std::min({k - 3, 9 - k, 1.0}));
+  };
+  return {channel(0), channel(8), channel(4)};
+}
 
 std::string labelled_mesh_to_glb(const std::vector<Eigen::Vector3d>& positions,
                                  const std::vector<std::array<std::uint32_t, 3>>& triangles, const std::vector<int>& labels,
@@ -198,8 +199,9 @@ std::string labelled_mesh_to_glb(const std::vector<Eigen::Vector3d>& positions,
     if (indices.empty()) continue;
     tinygltf::Material material;
     material.name = "segment_" + std::to_string(label);
-    const auto colour = label_colour(label);
-    material.pbrMetallicRoughness.baseColorFactor = {colour[0], colour[1], colour[2], colour[3]};
+    const auto colour = segment_colour(label);
+    material.pbrMetallicRoughness.baseColorFactor = {srgb_to_linear(colour[0]), srgb_to_linear(colour[1]),
+                                                     srgb_to_linear(colour[2]), 1.0};
     material.pbrMetallicRoughness.metallicFactor = 0.0;
     material.pbrMetallicRoughness.roughnessFactor = 0.8;
     material.doubleSided = true;

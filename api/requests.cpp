@@ -13,19 +13,6 @@ using nlohmann::json;
 
 namespace {
 
-// A key given as a point: the nearest vertex used by a face (a scan over every vertex, about a
-// millisecond per million vertices).
-std::uint32_t nearest_vertex(const PreparedMesh& mesh, const Eigen::Vector3d& p) {
-  std::uint32_t best = 0;
-  double best_d = HUGE_VAL;
-  for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
-    if (mesh.component[v] < 0) continue;
-    const double d = (mesh.positions[v] - p).squaredNorm();
-    if (d < best_d) best_d = d, best = v;
-  }
-  return best;
-}
-
 bool is_point_key(const json& k) {
   if (!k.is_object() || k.size() != 1 || !k.contains("point")) return false;
   const json& p = k["point"];
@@ -44,7 +31,7 @@ std::uint32_t parse_key(const json& k, const PreparedMesh& mesh, const std::stri
   const json& p = k["point"];
   const Eigen::Vector3d point(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
   if (!point.allFinite()) throw InvalidInputError(at + ".point must be finite");
-  return nearest_vertex(mesh, point);
+  return mesh.nearest_vertex(point);  // the prepared mesh's k-d tree (engine/vertex_index.h)
 }
 
 }  // namespace

@@ -22,6 +22,7 @@
 #include "engine/feature_line.h"
 #include "engine/mesh_io.h"
 #include "engine/segmentation.h"
+#include "engine/vertex_index.h"
 
 namespace {
 
@@ -146,6 +147,116 @@ double area_of(const std::vector<Eigen::Vector3d>& p, const std::vector<std::arr
 
 }  // namespace
 
+// The tables prepare_mesh keeps for segmentation and point keys, per triangle.
+void print_table_memory(const PreparedMesh& mesh) {
+  const double faces = double(mesh.triangles.size());
+  const double face_tables = double((mesh.vertex_faces.offsets.capacity() + mesh.vertex_faces.faces.capacity()) * 4 +
+                                    mesh.face_neighbors.capacity() * 12 + mesh.boundary_vertex.capacity());
+  std::printf("  built once: face tables %.1f B/triangle, vertex index %.1f B/triangle (prepared mesh in all: %.1f B/triangle)\n",
+              face_tables / faces, double(mesh.vertex_index.memory_bytes()) / faces, double(mesh.memory_bytes()) / faces);
+}
+
+// Point keys ({"point": [x, y, z]}) snapped to the nearest vertex: the prepared mesh's k-d tree
+// against the scan over every vertex the server did before, on points near the surface.
+void print_point_key_times(const PreparedMesh& mesh) {
+  std::vector<Eigen::Vector3d> queries;
+  for (std::size_t v = 0; v < mesh.n_vertices(); v += std::max<std::size_t>(1, mesh.n_vertices() / 1000))
+    queries.push_back(mesh.positions[v] + 0.3 * mesh.statistics.mean_edge_length * Eigen::Vector3d(0.31, -0.52, 0.17));
+  auto start = Clock::now();
+  const VertexIndex index(mesh.positions, mesh.component);
+  const double build_ms = ms_since(start);
+  std::size_t disagree = 0;
+  start = Clock::now();
+  std::vector<std::uint32_t> found;
+  for (const auto& q : queries) found.push_back(mesh.nearest_vertex(q));
+  const double tree_ms = ms_since(start);
+  start = Clock::now();
+  for (std::size_t i = 0; i < queries.size(); ++i) {
+    std::uint32_t best = 0;
+    double best_d = HUGE_VAL;
+    for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
+      if (mesh.component[v] < 0) continue;
+      const double d = (mesh.positions[v] - queries[i]).squaredNorm();
+      if (d < best_d) best_d = d, best = v;
+    }
+    disagree += best != found[i];
+  }
+  const double scan_ms = ms_since(start);
+  std::printf("  point keys: k-d tree %.2f us per key, scan %.1f us per key (%zu keys, %zu disagree); tree built in %.1f ms\n",
+              1000 * tree_ms / double(queries.size()), 1000 * scan_ms / double(queries.size()), queries.size(), disagree,
+              build_ms);
+}
+
+// Detects each cut's loop, then segments along all of them in both modes; false when a loop is missing.
+bool bench_model(const Model& model, int repeat) {
+  const std::string path = std::string(FEATURELINE_SHARED_DIR) + "/data/meshes/" + model.file;
+  bool ok = true;
+  const auto mesh = prepare_mesh(read_mesh_file(path));
+  std::printf("%s: %zu vertices, %zu triangles, prepare %.1f ms\n", model.file, mesh->statistics.vertices,
+              mesh->statistics.faces, mesh->prepare_ms);
+  print_table_memory(*mesh);
+  std::vector<FeatureLineResult> lines;
+  for (const auto& cut : model.cuts) {
+    std::vector<std::vector<std::uint32_t>> ends;
+    const auto loops = plane_loops(*mesh, cut.normal, cut.normal.dot(cut.through), &ends);
+    std::size_t best = loops.size();
+    double best_distance = HUGE_VAL;
+    for (std::size_t i = 0; i < loops.size(); ++i) {
+      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+      for (const auto& p : loops[i]) centre += p;
+      centre /= double(loops[i].size());
+      if ((centre - cut.near).norm() < best_distance) best_distance = (centre - cut.near).norm(), best = i;
+    }
+    if (best == loops.size()) {
+      std::printf("  %-10s no loop found\n", cut.name);
+      ok = false;
+      continue;
+    }
+    FeatureLineRequest request;
+    request.keys = keys_on_loop(loops[best], ends[best]);
+    request.closed = true;
+    std::vector<double> times;
+    FeatureLineResult line;
+    for (int i = 0; i < repeat; ++i) {
+      const auto start = Clock::now();
+      line = detect_feature_line(*mesh, request);
+      times.push_back(ms_since(start));
+    }
+    std::printf("  %-10s keys", cut.name);
+    for (auto k : request.keys) std::printf(" %u", k);
+    std::printf(": detect %.2f ms, %zu refined points, length %.4f\n", median(times), line.refined.size(),
+                line.refined_length);
+    lines.push_back(std::move(line));
+  }
+  const double area = area_of(mesh->positions, mesh->triangles);
+  for (auto mode : {SegmentationMode::snap, SegmentationMode::remesh}) {
+    const auto timed = run(*mesh, lines, mode, repeat);
+    const auto& r = timed.result;
+    std::printf("  %-6s %7.2f ms, %zu segments, %zu cut edges", mode == SegmentationMode::snap ? "snap" : "remesh",
+                timed.ms, r.segments.size(), r.cut_edges);
+    if (r.remeshed)
+      std::printf(", +%zu vertices, +%zu triangles, area change %.1e", r.positions.size() - mesh->n_vertices(),
+                  r.triangles.size() - mesh->triangles.size(), std::abs(r.total_area - area) / area);
+    std::printf("\n    label    faces        area   area%%  boundary   bbox centre\n");
+    for (const auto& s : r.segments)
+      std::printf("    %5d %8zu %11.6f %6.2f%% %9.5f   (%.3f, %.3f, %.3f)\n", s.label, s.faces, s.area,
+                  100 * s.area / r.total_area, s.boundary_length, 0.5 * (s.bbox_min[0] + s.bbox_max[0]),
+                  0.5 * (s.bbox_min[1] + s.bbox_max[1]), 0.5 * (s.bbox_min[2] + s.bbox_max[2]));
+    for (const auto& w : r.warnings) std::printf("    warning: %s\n", w.c_str());
+  }
+  // Slivers (a line doubling back to a pinned key) merged into their neighbours.
+  std::printf("  merge_tiny_segments:");
+  for (auto mode : {SegmentationMode::snap, SegmentationMode::remesh}) {
+    const auto timed = run(*mesh, lines, mode, repeat, true);
+    std::printf(" %s %.2f ms, %zu segments (areas", mode == SegmentationMode::snap ? "snap" : "remesh", timed.ms,
+                timed.result.segments.size());
+    for (const auto& s : timed.result.segments) std::printf(" %.6f", s.area);
+    std::printf(")%s", mode == SegmentationMode::snap ? ";" : "\n");
+  }
+  std::printf("\n");
+  return ok;
+}
+
 int main(int argc, char** argv) {
   int repeat = 5;
   for (int i = 1; i < argc; ++i) {
@@ -170,74 +281,22 @@ int main(int argc, char** argv) {
               repeat);
   int status = 0;
   for (const auto& model : models) {
-    const std::string path = std::string(FEATURELINE_SHARED_DIR) + "/data/meshes/" + model.file;
     try {
-      const auto mesh = prepare_mesh(read_mesh_file(path));
-      std::printf("%s: %zu vertices, %zu triangles, prepare %.1f ms\n", model.file, mesh->statistics.vertices,
-                  mesh->statistics.faces, mesh->prepare_ms);
-      std::vector<FeatureLineResult> lines;
-      for (const auto& cut : model.cuts) {
-        std::vector<std::vector<std::uint32_t>> ends;
-        const auto loops = plane_loops(*mesh, cut.normal, cut.normal.dot(cut.through), &ends);
-        std::size_t best = loops.size();
-        double best_distance = HUGE_VAL;
-        for (std::size_t i = 0; i < loops.size(); ++i) {
-          V centre = V::Zero();
-          for (const auto& p : loops[i]) centre += p;
-          centre /= double(loops[i].size());
-          if ((centre - cut.near).norm() < best_distance) best_distance = (centre - cut.near).norm(), best = i;
-        }
-        if (best == loops.size()) {
-          std::printf("  %-10s no loop found\n", cut.name);
-          status = 1;
-          continue;
-        }
-        FeatureLineRequest request;
-        request.keys = keys_on_loop(loops[best], ends[best]);
-        request.closed = true;
-        std::vector<double> times;
-        FeatureLineResult line;
-        for (int i = 0; i < repeat; ++i) {
-          const auto start = Clock::now();
-          line = detect_feature_line(*mesh, request);
-          times.push_back(ms_since(start));
-        }
-        std::printf("  %-10s keys", cut.name);
-        for (auto k : request.keys) std::printf(" %u", k);
-        std::printf(": detect %.2f ms, %zu refined points, length %.4f\n", median(times), line.refined.size(),
-                    line.refined_length);
-        lines.push_back(std::move(line));
-      }
-      const double area = area_of(mesh->positions, mesh->triangles);
-      for (auto mode : {SegmentationMode::snap, SegmentationMode::remesh}) {
-        const auto timed = run(*mesh, lines, mode, repeat);
-        const auto& r = timed.result;
-        std::printf("  %-6s %7.2f ms, %zu segments, %zu cut edges", mode == SegmentationMode::snap ? "snap" : "remesh",
-                    timed.ms, r.segments.size(), r.cut_edges);
-        if (r.remeshed)
-          std::printf(", +%zu vertices, +%zu triangles, area change %.1e", r.positions.size() - mesh->n_vertices(),
-                      r.triangles.size() - mesh->triangles.size(), std::abs(r.total_area - area) / area);
-        std::printf("\n    label    faces        area   area%%  boundary   bbox centre\n");
-        for (const auto& s : r.segments)
-          std::printf("    %5d %8zu %11.6f %6.2f%% %9.5f   (%.3f, %.3f, %.3f)\n", s.label, s.faces, s.area,
-                      100 * s.area / r.total_area, s.boundary_length, 0.5 * (s.bbox_min[0] + s.bbox_max[0]),
-                      0.5 * (s.bbox_min[1] + s.bbox_max[1]), 0.5 * (s.bbox_min[2] + s.bbox_max[2]));
-        for (const auto& w : r.warnings) std::printf("    warning: %s\n", w.c_str());
-      }
-      // Slivers (a line doubling back to a pinned key) merged into their neighbours.
-      std::printf("  merge_tiny_segments:");
-      for (auto mode : {SegmentationMode::snap, SegmentationMode::remesh}) {
-        const auto timed = run(*mesh, lines, mode, repeat, true);
-        std::printf(" %s %.2f ms, %zu segments (areas", mode == SegmentationMode::snap ? "snap" : "remesh", timed.ms,
-                    timed.result.segments.size());
-        for (const auto& s : timed.result.segments) std::printf(" %.6f", s.area);
-        std::printf(")%s", mode == SegmentationMode::snap ? ";" : "\n");
-      }
-      std::printf("\n");
+      if (!bench_model(model, repeat)) status = 1;
     } catch (const std::exception& e) {
       std::printf("%s: error: %s\n\n", model.file, e.what());
       status = 1;
     }
+  }
+  // The largest shared mesh, for the memory the tables add.
+  try {
+    const auto igea = prepare_mesh(read_mesh_file(std::string(FEATURELINE_SHARED_DIR) + "/data/meshes/igea.ply"));
+    std::printf("igea.ply: %zu triangles\n", igea->triangles.size());
+    print_table_memory(*igea);
+    print_point_key_times(*igea);
+  } catch (const std::exception& e) {
+    std::printf("igea.ply: error: %s\n", e.what());
+    status = 1;
   }
   return status;
 }

@@ -10,11 +10,11 @@
 #include <thread>
 
 #include "engine/errors.h"
+#include "engine/internal/geometry.h"
 
 namespace featureline {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 Eigen::Vector3d to_eigen(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
 
@@ -199,7 +199,7 @@ EdgeAngles dihedral_angles(const TriMesh& mesh, const std::vector<Eigen::Vector3
       const Eigen::Vector3d na = e.cross(P[std::size_t(a)] - P[v]);
       const Eigen::Vector3d nb = (P[std::size_t(b)] - P[v]).cross(e);
       if (!(na.norm() > 0) || !(nb.norm() > 0)) continue;
-      out.angle[k] = std::atan2(na.cross(nb).norm(), na.dot(nb));
+      out.angle[k] = angle_between(na, nb);
       out.corner_a[k] = a;
       out.corner_b[k] = b;
     }
@@ -456,7 +456,7 @@ std::vector<Eigen::Vector3d> compute_vertex_normals(const TriMesh& mesh) {
     n /= len;
     for (int i = 0; i < 3; ++i) {
       const Eigen::Vector3d a = p[(i + 1) % 3] - p[i], b = p[(i + 2) % 3] - p[i];
-      const double angle = std::atan2(a.cross(b).norm(), a.dot(b));
+      const double angle = angle_between(a, b);
       normals[idx[i]] += angle * n;
     }
   }

@@ -47,16 +47,6 @@ std::vector<SurfacePoint> vertex_points(const PreparedMesh& pm, const std::vecto
 
 }  // namespace
 
-SurfacePoint surface_point_at_vertex(const PreparedMesh& pm, std::uint32_t v) {
-  SurfacePoint s;
-  s.position = pm.positions[v];
-  const auto f = *pm.mesh.vf_range(TriMesh::VertexHandle(int(v))).begin();
-  s.face = std::uint32_t(f.idx());
-  const auto& t = pm.triangles[s.face];
-  for (int k = 0; k < 3; ++k) s.barycentric[k] = t[k] == v ? 1.0 : 0.0;
-  return s;
-}
-
 double mean_feature_strength(const PreparedMesh& pm, const std::vector<SurfacePoint>& points, double feature_sign,
                              double cap) {
   auto strength = [&](const SurfacePoint& p) {

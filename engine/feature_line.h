@@ -88,9 +88,6 @@ struct FeatureLineResult {
 /// \throw InvalidInputError, GeometryError
 FeatureLineResult detect_feature_line(const PreparedMesh& mesh, const FeatureLineRequest& request);
 
-/// The surface point sitting exactly on mesh vertex v (barycentric 1 on one face corner).
-SurfacePoint surface_point_at_vertex(const PreparedMesh& mesh, std::uint32_t v);
-
 /// Mean feature strength (feature value of the line's sign over the curvature scale, capped
 /// at `cap`) along a polyline of surface points, weighted by arc length; values inside faces
 /// are interpolated barycentrically. The "never worse" test compares lines with it.

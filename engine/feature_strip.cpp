@@ -9,15 +9,13 @@
 #include <Eigen/Sparse>
 
 #include "engine/errors.h"
+#include "engine/internal/geometry.h"
 
 namespace featureline {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 double corner_angle(const Eigen::Vector3d& at, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const Eigen::Vector3d u = a - at, v = b - at;
-  return std::atan2(u.cross(v).norm(), u.dot(v));
+  return angle_between(a - at, b - at);
 }
 
 // Sum of corner angles at `center` swept counter-clockwise from the halfedge to `from` until
@@ -116,7 +114,7 @@ FeatureStrip extract_feature_strip(const PreparedMesh& pm, const std::vector<std
   std::vector<std::uint32_t> faces;
   for (std::size_t i = 0; i < strip.vertices.size(); ++i) {
     if (strip.ring[i] >= strip.rings) continue;
-    for (auto f : pm.mesh.vf_range(TriMesh::VertexHandle(int(strip.vertices[i])))) faces.push_back(std::uint32_t(f.idx()));
+    faces.insert(faces.end(), pm.vertex_faces.begin(strip.vertices[i]), pm.vertex_faces.end(strip.vertices[i]));
   }
   std::sort(faces.begin(), faces.end());
   faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
@@ -137,35 +135,18 @@ FeatureStrip extract_feature_strip(const PreparedMesh& pm, const std::vector<std
   strip.mean_edge_length = strip.triangles.empty() ? pm.statistics.mean_edge_length
                                                    : edge_sum / (3.0 * double(strip.triangles.size()));
 
-  // Triangle adjacency inside the strip, for walking point location.
-  struct HalfEdge {
-    std::uint64_t key;
-    std::uint32_t triangle;
-    int corner;
-  };
-  std::vector<HalfEdge> half_edges;
-  half_edges.reserve(strip.triangles.size() * 3);
+  // Triangle adjacency inside the strip, for walking point location: the mesh's face table
+  // (built once in prepare_mesh) restricted to the strip. strip.faces is sorted, so a face's
+  // local index is found by binary search.
+  strip.triangle_neighbors.assign(strip.triangles.size(), {-1, -1, -1});
   for (std::uint32_t t = 0; t < strip.triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) {
-      auto a = strip.triangles[t][(k + 1) % 3], b = strip.triangles[t][(k + 2) % 3];
-      if (a > b) std::swap(a, b);
-      half_edges.push_back({(std::uint64_t(a) << 32) | b, t, k});
+      // The edge opposite corner k is edge (k + 1) of the face in the mesh table's numbering.
+      const auto across = pm.face_neighbors[strip.faces[t]][(k + 1) % 3];
+      if (across == kNoIndex) continue;
+      const auto it = std::lower_bound(strip.faces.begin(), strip.faces.end(), across);
+      if (it != strip.faces.end() && *it == across) strip.triangle_neighbors[t][k] = std::int32_t(it - strip.faces.begin());
     }
-  std::sort(half_edges.begin(), half_edges.end(), [](const HalfEdge& x, const HalfEdge& y) { return x.key < y.key; });
-  strip.triangle_neighbors.assign(strip.triangles.size(), {-1, -1, -1});
-  for (std::size_t i = 0; i + 1 < half_edges.size(); ++i) {
-    if (half_edges[i].key != half_edges[i + 1].key) continue;
-    // exactly two triangles on a manifold edge; non-manifold fans are left unlinked
-    if (i + 2 < half_edges.size() && half_edges[i + 2].key == half_edges[i].key) {
-      while (i + 1 < half_edges.size() && half_edges[i + 1].key == half_edges[i].key) ++i;
-      continue;
-    }
-    const auto& x = half_edges[i];
-    const auto& y = half_edges[i + 1];
-    strip.triangle_neighbors[x.triangle][x.corner] = std::int32_t(y.triangle);
-    strip.triangle_neighbors[y.triangle][y.corner] = std::int32_t(x.triangle);
-    ++i;
-  }
   return strip;
 }
 

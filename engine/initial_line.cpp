@@ -7,51 +7,14 @@
 #include <sstream>
 
 #include "engine/errors.h"
+#include "engine/internal/edge_search.h"
+#include "engine/internal/geometry.h"
 
 namespace featureline {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 bool is_blocked(const std::vector<std::uint32_t>* blocked, std::uint32_t v) {
   return blocked != nullptr && std::binary_search(blocked->begin(), blocked->end(), v);
-}
-
-double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
-
-// Per-thread search scratch whose reset is O(1): an entry is valid only when its stamp
-// equals the current generation. Keeps each query's cost proportional to what it visits,
-// not to the mesh size.
-struct SearchScratch {
-  std::vector<double> cost;
-  std::vector<std::uint32_t> parent;
-  std::vector<std::uint32_t> stamp;
-  std::vector<std::uint32_t> closed_stamp;
-  std::uint32_t generation = 0;
-
-  void begin(std::size_t n) {
-    if (stamp.size() < n) {
-      cost.assign(n, 0);
-      parent.assign(n, 0);
-      stamp.assign(n, 0);
-      closed_stamp.assign(n, 0);
-      generation = 0;
-    }
-    if (++generation == 0) {  // wrapped: clear once every 4 billion queries
-      std::fill(stamp.begin(), stamp.end(), 0);
-      std::fill(closed_stamp.begin(), closed_stamp.end(), 0);
-      generation = 1;
-    }
-  }
-  bool seen(std::uint32_t v) const { return stamp[v] == generation; }
-  bool closed(std::uint32_t v) const { return closed_stamp[v] == generation; }
-};
-
-SearchScratch& scratch() {
-  thread_local SearchScratch s;
-  return s;
 }
 
 // Discrete rank scores of the paper: among n candidates the best gets n, the worst 1.
@@ -134,7 +97,7 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
   const std::size_t max_steps =
       std::min<std::size_t>(mesh.n_vertices(), std::size_t(8.0 * start_to_end.norm() / finest) + 64);
 
-  SearchScratch& seen = scratch();
+  SearchScratch& seen = search_scratch();
   seen.begin(mesh.n_vertices());
   std::vector<std::uint32_t> path{from};
   seen.stamp[from] = seen.generation;
@@ -221,55 +184,29 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
                                                              const Cancellation* cancel) {
   const auto& P = mesh.positions;
   const double floor = feature_weighted ? std::clamp(options.feature_weight_floor, 1e-6, 1.0) : 1.0;
-  SearchScratch& s = scratch();
-  s.begin(mesh.n_vertices());
-  using Entry = std::pair<double, std::uint32_t>;  // (cost + heuristic, vertex)
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
   // A*: the cheapest possible cost per unit length is `floor`, so floor * |x - goal| never
   // overestimates and the search stays local to the two keys.
   auto heuristic = [&](std::uint32_t v) { return floor * (P[to] - P[v]).norm(); };
-  s.cost[from] = 0;
-  s.parent[from] = from;
-  s.stamp[from] = s.generation;
-  open.emplace(heuristic(from), from);
-  std::size_t settled = 0;
-  while (!open.empty()) {
-    const auto [priority, v] = open.top();
-    open.pop();
-    if (s.closed(v)) continue;
-    s.closed_stamp[v] = s.generation;
-    if ((++settled & 4095) == 0) throw_if_cancelled(cancel);
-    if (v == to) break;
-    const double strength_v = feature_weighted ? feature_strength(mesh, v, feature_sign) : 0;
-    for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) {
-      const auto w = mesh.neighbors[k];
-      if (s.closed(w) || (w != to && is_blocked(blocked, w))) continue;
-      double weight = 1;
-      if (feature_weighted) {
-        // A crease edge of the line's kind is a feature whatever its ends' curvature says
-        // (on skinny CAD triangles the vertex fields are unreliable, a dihedral angle is not).
-        const auto crease = mesh.curvature.crease[k];
-        const bool on_crease = crease != 0 && (feature_sign == 0 || crease == feature_sign);
-        // An edge joining two crease vertices without being a crease is a chord across a
-        // face (a CAD cap's long diagonal cutting a rounded corner): no feature at all.
-        const bool chord = !on_crease && mesh.curvature.on_crease[v] && mesh.curvature.on_crease[w];
-        const double strength =
-            on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v + feature_strength(mesh, w, feature_sign));
-        weight = floor + (1 - floor) * (1 - strength);
-      }
-      const double cost = s.cost[v] + mesh.neighbor_edge_lengths[k] * weight;
-      if (!s.seen(w) || cost < s.cost[w]) {
-        s.stamp[w] = s.generation;
-        s.cost[w] = cost;
-        s.parent[w] = v;
-        open.emplace(cost + heuristic(w), w);
-      }
-    }
-  }
-  if (!s.closed(to)) return std::nullopt;
-  std::vector<std::uint32_t> path{to};
-  while (path.back() != from) path.push_back(s.parent[path.back()]);
-  std::reverse(path.begin(), path.end());
+  std::uint32_t strength_of = kNoIndex;  // the vertex whose strength `strength_v` holds
+  double strength_v = 0;
+  auto edge_cost = [&](std::uint32_t v, std::uint32_t k) {
+    const auto w = mesh.neighbors[k];
+    if (w != to && is_blocked(blocked, w)) return -1.0;
+    if (!feature_weighted) return mesh.neighbor_edge_lengths[k];
+    if (strength_of != v) strength_of = v, strength_v = feature_strength(mesh, v, feature_sign);
+    // A crease edge of the line's kind is a feature whatever its ends' curvature says
+    // (on skinny CAD triangles the vertex fields are unreliable, a dihedral angle is not).
+    const auto crease = mesh.curvature.crease[k];
+    const bool on_crease = crease != 0 && (feature_sign == 0 || crease == feature_sign);
+    // An edge joining two crease vertices without being a crease is a chord across a
+    // face (a CAD cap's long diagonal cutting a rounded corner): no feature at all.
+    const bool chord = !on_crease && mesh.curvature.on_crease[v] && mesh.curvature.on_crease[w];
+    const double strength = on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v + feature_strength(mesh, w, feature_sign));
+    return mesh.neighbor_edge_lengths[k] * (floor + (1 - floor) * (1 - strength));
+  };
+  auto path = cheapest_edge_path(mesh, from, [to](std::uint32_t v) { return v == to; }, edge_cost, heuristic, HUGE_VAL,
+                                 cancel);
+  if (path.empty()) return std::nullopt;
   return path;
 }
 

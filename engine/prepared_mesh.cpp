@@ -12,6 +12,7 @@
 #include <mutex>
 
 #include "engine/errors.h"
+#include "engine/internal/geometry.h"
 
 namespace featureline {
 namespace {
@@ -19,11 +20,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 Eigen::Vector3d to_eigen(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
-
-std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
-  if (a > b) std::swap(a, b);
-  return (std::uint64_t(a) << 32) | b;
-}
 
 // Counts edges with more than two triangles and vertices whose triangles form more than
 // one edge-connected fan, on the input soup (before OpenMesh had to split anything).
@@ -44,41 +40,30 @@ void count_non_manifold(const RawMesh& raw, MeshStatistics& stats) {
 
   // Fans: per vertex, union the incident triangles that share an edge through the vertex.
   const std::size_t n = raw.positions.size();
-  std::vector<std::uint32_t> offsets(n + 1, 0);
-  for (const auto& t : raw.triangles)
-    if (!(t[0] == t[1] || t[1] == t[2] || t[0] == t[2]))
-      for (auto v : t) ++offsets[v + 1];
-  std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
-  std::vector<std::uint32_t> incident(offsets[n]);
-  std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
-  for (std::uint32_t f = 0; f < raw.triangles.size(); ++f) {
+  const VertexFaces incident = build_vertex_faces(raw.triangles, n);
+  auto degenerate = [&](std::uint32_t f) {
     const auto& t = raw.triangles[f];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
-    for (auto v : t) incident[fill[v]++] = f;
-  }
-  std::vector<int> parent;
-  std::vector<std::pair<std::uint32_t, int>> spoke;  // (other vertex, local triangle)
-  for (std::size_t v = 0; v < n; ++v) {
-    const std::uint32_t begin = offsets[v], end = offsets[v + 1];
-    if (end - begin < 2) continue;
-    parent.resize(end - begin);
-    std::iota(parent.begin(), parent.end(), 0);
-    auto find = [&](int x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
+    return t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
+  };
+  UnionFind fans;
+  std::vector<std::uint32_t> faces;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> spoke;  // (other vertex, local triangle)
+  for (std::uint32_t v = 0; v < n; ++v) {
+    faces.clear();
+    for (auto it = incident.begin(v); it != incident.end(v); ++it)
+      if (!degenerate(*it)) faces.push_back(*it);
+    if (faces.size() < 2) continue;
+    fans.reset(faces.size());
     spoke.clear();
-    for (std::uint32_t i = begin; i < end; ++i) {
-      const auto& t = raw.triangles[incident[i]];
-      for (auto w : t)
-        if (w != v) spoke.emplace_back(w, int(i - begin));
-    }
+    for (std::uint32_t i = 0; i < faces.size(); ++i)
+      for (auto w : raw.triangles[faces[i]])
+        if (w != v) spoke.emplace_back(w, i);
     std::sort(spoke.begin(), spoke.end());
     for (std::size_t i = 1; i < spoke.size(); ++i)
-      if (spoke[i].first == spoke[i - 1].first) parent[find(spoke[i].second)] = find(spoke[i - 1].second);
-    int fans = 0;
-    for (int i = 0; i < int(parent.size()); ++i) fans += find(i) == i;
-    if (fans > 1) ++stats.non_manifold_vertices;
+      if (spoke[i].first == spoke[i - 1].first) fans.unite(spoke[i].second, spoke[i - 1].second);
+    std::size_t roots = 0;
+    for (std::uint32_t i = 0; i < faces.size(); ++i) roots += fans.is_root(i);
+    if (roots > 1) ++stats.non_manifold_vertices;
   }
 }
 
@@ -89,39 +74,14 @@ double percentile(std::vector<double> values, double q) {
   return values[k];
 }
 
-}  // namespace
-
-std::size_t PreparedMesh::memory_bytes() const {
-  // OpenMesh's array kernel: points, normals-free vertices (halfedge handle), halfedges, edges, faces.
-  std::size_t bytes = sizeof(PreparedMesh);
-  bytes += mesh.n_vertices() * (sizeof(TriMesh::Point) + sizeof(int) + 4);
-  bytes += mesh.n_halfedges() * (3 * sizeof(int) + 4);
-  bytes += mesh.n_edges() * 4 + mesh.n_faces() * (sizeof(int) + 4);
-  bytes += source_triangle.capacity() * sizeof(std::uint32_t) + triangles.capacity() * 3 * sizeof(std::uint32_t);
-  bytes += positions.capacity() * sizeof(Eigen::Vector3d) + vertex_normals.capacity() * sizeof(Eigen::Vector3d);
-  bytes += (curvature.mean.capacity() + curvature.k_max.capacity() + curvature.k_min.capacity()) * sizeof(double);
-  bytes += curvature.crease.capacity() + curvature.on_crease.capacity();
-  bytes += neighbor_offsets.capacity() * sizeof(std::uint32_t) + neighbors.capacity() * sizeof(std::uint32_t);
-  bytes += neighbor_edge_lengths.capacity() * sizeof(double) + component.capacity() * sizeof(std::int32_t);
-  for (const auto& w : warnings) bytes += w.capacity();
-  return bytes;
-}
-
-std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options, const Cancellation* cancel) {
-  const auto start = Clock::now();
-  // OpenMesh prints add_face failures ("patch re-linking failed") to std::cerr; we handle and
-  // report every such face ourselves, so its stream is switched off once for the process.
-  static std::once_flag quiet;
-  std::call_once(quiet, [] { omerr().disable(); });
-  auto prepared = std::make_shared<PreparedMesh>();
-  PreparedMesh& pm = *prepared;
-  MeshStatistics& stats = pm.statistics;
-  pm.warnings = std::move(raw.warnings);
-  stats.file_vertices = raw.positions.size();
-  stats.file_faces = raw.source_faces;
-  count_non_manifold(raw, stats);
-
+// Adds the soup's triangles to pm.mesh and pm.triangles in input order. OpenMesh refuses faces
+// that would make an edge or vertex non-manifold (it prints to std::cerr when it does); we check
+// first and, like OpenMesh's own reader, give such a face its own copies of the vertices so it is
+// kept and every id stays valid. Degenerate triangles (a repeated index) are dropped; both are
+// reported in pm.warnings.
+void add_triangles(const RawMesh& raw, PreparedMesh& pm, const Cancellation* cancel) {
   TriMesh& mesh = pm.mesh;
+  MeshStatistics& stats = pm.statistics;
   mesh.reserve(raw.positions.size(), raw.triangles.size() * 3 / 2, raw.triangles.size());
   for (const auto& p : raw.positions) {
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
@@ -141,9 +101,6 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
       continue;
     }
     for (int k = 0; k < 3; ++k) corners[k] = TriMesh::VertexHandle(int(tri[k]));
-    // OpenMesh refuses faces that would make an edge or vertex non-manifold (it prints to
-    // std::cerr when it does); we check first and, like OpenMesh's own reader, give such a
-    // face its own copies of the vertices so it is kept and every id stays valid.
     bool fits = true;
     for (int k = 0; k < 3 && fits; ++k) {
       if (!mesh.is_boundary(corners[k])) fits = false;  // a closed fan takes no more faces
@@ -177,15 +134,13 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
         << " vertices appended after the input's " << stats.file_vertices << ")";
     pm.warnings.push_back(msg.str());
   }
-  if (mesh.n_faces() == 0) throw GeometryError("the mesh has no usable triangle");
+}
 
+// Vertex adjacency in compressed rows with edge lengths beside it; the mean edge length and
+// the boundary edge count.
+void build_vertex_adjacency(PreparedMesh& pm) {
+  const TriMesh& mesh = pm.mesh;
   const std::size_t n = mesh.n_vertices();
-  stats.vertices = n;
-  stats.faces = mesh.n_faces();
-  pm.positions.resize(n);
-  for (auto v : mesh.vertices()) pm.positions[v.idx()] = to_eigen(mesh.point(v));
-
-  // Adjacency in compressed rows, edge lengths beside it.
   pm.neighbor_offsets.assign(n + 1, 0);
   for (auto v : mesh.vertices()) pm.neighbor_offsets[v.idx() + 1] = pm.neighbor_offsets[v.idx()] + mesh.valence(v);
   pm.neighbors.resize(pm.neighbor_offsets[n]);
@@ -201,12 +156,16 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   double edge_sum = 0;
   for (auto e : mesh.edges()) {
     edge_sum += mesh.calc_edge_length(e);
-    if (mesh.is_boundary(e)) ++stats.boundary_edges;
+    if (mesh.is_boundary(e)) ++pm.statistics.boundary_edges;
   }
-  stats.mean_edge_length = mesh.n_edges() > 0 ? edge_sum / double(mesh.n_edges()) : 0;
-  if (!(stats.mean_edge_length > 0)) throw GeometryError("every edge of the mesh has zero length");
+  pm.statistics.mean_edge_length = mesh.n_edges() > 0 ? edge_sum / double(mesh.n_edges()) : 0;
+  if (!(pm.statistics.mean_edge_length > 0)) throw GeometryError("every edge of the mesh has zero length");
+}
 
-  // Components by breadth-first search over the adjacency.
+// Components by breadth-first search over the adjacency; unreferenced vertices get -1.
+void label_components(PreparedMesh& pm) {
+  const std::size_t n = pm.positions.size();
+  MeshStatistics& stats = pm.statistics;
   pm.component.assign(n, -1);
   std::vector<std::uint32_t> queue;
   for (std::uint32_t s = 0; s < n; ++s) {
@@ -224,8 +183,13 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
     }
   }
   for (std::uint32_t v = 0; v < n; ++v) stats.unreferenced_vertices += pm.component[v] < 0;
+}
 
-  // Boundary loops: follow next_halfedge around each unvisited boundary halfedge.
+// Boundary loops (following next_halfedge around each unvisited boundary halfedge) and the
+// bounding box of the referenced vertices.
+void measure_boundary_and_box(PreparedMesh& pm) {
+  const TriMesh& mesh = pm.mesh;
+  MeshStatistics& stats = pm.statistics;
   std::vector<char> seen(mesh.n_halfedges(), 0);
   for (auto h : mesh.halfedges()) {
     if (!mesh.is_boundary(h) || seen[h.idx()]) continue;
@@ -237,12 +201,136 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
       c = mesh.next_halfedge_handle(c);
     } while (c != h && !seen[c.idx()] && ++guard < mesh.n_halfedges());
   }
-
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(HUGE_VAL), hi = Eigen::Vector3d::Constant(-HUGE_VAL);
-  for (std::uint32_t v = 0; v < n; ++v)
+  for (std::uint32_t v = 0; v < pm.positions.size(); ++v)
     if (pm.component[v] >= 0) lo = lo.cwiseMin(pm.positions[v]), hi = hi.cwiseMax(pm.positions[v]);
   stats.bbox_min = {lo.x(), lo.y(), lo.z()};
   stats.bbox_max = {hi.x(), hi.y(), hi.z()};
+}
+
+// The face tables and the nearest-vertex index every request reads (built once here).
+void build_face_tables(PreparedMesh& pm) {
+  const std::size_t n = pm.positions.size();
+  pm.vertex_faces = build_vertex_faces(pm.triangles, n);
+  pm.face_neighbors = build_face_neighbors(pm.triangles, n);
+  pm.boundary_vertex.assign(n, 0);
+  for (std::uint32_t f = 0; f < pm.triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (pm.face_neighbors[f][k] == kNoIndex) pm.boundary_vertex[pm.triangles[f][k]] = pm.boundary_vertex[pm.triangles[f][(k + 1) % 3]] = 1;
+  pm.vertex_index = VertexIndex(pm.positions, pm.component);
+}
+
+// Curvature range and percentiles of the feature value; the curvature scale.
+void measure_curvature(PreparedMesh& pm) {
+  MeshStatistics& stats = pm.statistics;
+  std::vector<double> magnitudes;
+  magnitudes.reserve(pm.positions.size());
+  stats.curvature_min = HUGE_VAL;
+  stats.curvature_max = -HUGE_VAL;
+  for (std::uint32_t v = 0; v < pm.positions.size(); ++v) {
+    if (pm.component[v] < 0) continue;
+    magnitudes.push_back(feature_value(pm.curvature, v, 0));
+    stats.curvature_min = std::min(stats.curvature_min, dominant_curvature(pm.curvature, v));
+    stats.curvature_max = std::max(stats.curvature_max, dominant_curvature(pm.curvature, v));
+  }
+  stats.abs_curvature_p50 = percentile(magnitudes, 0.5);
+  stats.abs_curvature_p90 = percentile(magnitudes, 0.9);
+  stats.abs_curvature_p99 = percentile(magnitudes, 0.99);
+  // A flat mesh has no curvature at all; any positive scale then works.
+  pm.curvature_scale = stats.abs_curvature_p90 > 0 ? stats.abs_curvature_p90 : 1.0 / stats.mean_edge_length;
+}
+
+}  // namespace
+
+VertexFaces build_vertex_faces(const std::vector<std::array<std::uint32_t, 3>>& tris, std::size_t n_vertices) {
+  VertexFaces vf;
+  vf.offsets.assign(n_vertices + 1, 0);
+  for (const auto& t : tris)
+    for (auto v : t) ++vf.offsets[v + 1];
+  std::partial_sum(vf.offsets.begin(), vf.offsets.end(), vf.offsets.begin());
+  vf.faces.resize(vf.offsets.back());
+  std::vector<std::uint32_t> fill(vf.offsets.begin(), vf.offsets.end() - 1);
+  for (std::uint32_t f = 0; f < tris.size(); ++f)
+    for (auto v : tris[f]) vf.faces[fill[v]++] = f;
+  return vf;
+}
+
+std::vector<std::array<std::uint32_t, 3>> build_face_neighbors(const std::vector<std::array<std::uint32_t, 3>>& tris,
+                                                               std::size_t n_vertices) {
+  // Face edges bucketed by their lower end (a counting sort), then matched by the upper end
+  // inside each bucket: a handful of entries each.
+  struct Entry {
+    std::uint32_t upper, face;
+    int k;
+  };
+  std::vector<std::uint32_t> offsets(n_vertices + 1, 0);
+  for (const auto& t : tris)
+    for (int k = 0; k < 3; ++k) ++offsets[std::min(t[k], t[(k + 1) % 3]) + 1];
+  std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+  std::vector<Entry> entries(offsets.back());
+  std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
+  for (std::uint32_t f = 0; f < tris.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const auto a = tris[f][k], b = tris[f][(k + 1) % 3];
+      entries[fill[std::min(a, b)]++] = {std::max(a, b), f, k};
+    }
+  std::vector<std::array<std::uint32_t, 3>> across(tris.size(), {kNoIndex, kNoIndex, kNoIndex});
+  for (std::size_t v = 0; v < n_vertices; ++v)
+    for (auto i = offsets[v]; i < offsets[v + 1]; ++i) {
+      int found = 0;
+      std::uint32_t match = kNoIndex;
+      for (auto j = offsets[v]; j < offsets[v + 1]; ++j)
+        if (j != i && entries[j].upper == entries[i].upper) ++found, match = entries[j].face;
+      across[entries[i].face][entries[i].k] = found == 1 ? match : kNoIndex;
+    }
+  return across;
+}
+
+std::size_t PreparedMesh::memory_bytes() const {
+  // OpenMesh's array kernel: points, normals-free vertices (halfedge handle), halfedges, edges, faces.
+  std::size_t bytes = sizeof(PreparedMesh);
+  bytes += mesh.n_vertices() * (sizeof(TriMesh::Point) + sizeof(int) + 4);
+  bytes += mesh.n_halfedges() * (3 * sizeof(int) + 4);
+  bytes += mesh.n_edges() * 4 + mesh.n_faces() * (sizeof(int) + 4);
+  bytes += source_triangle.capacity() * sizeof(std::uint32_t) + triangles.capacity() * 3 * sizeof(std::uint32_t);
+  bytes += positions.capacity() * sizeof(Eigen::Vector3d) + vertex_normals.capacity() * sizeof(Eigen::Vector3d);
+  bytes += (curvature.mean.capacity() + curvature.k_max.capacity() + curvature.k_min.capacity()) * sizeof(double);
+  bytes += curvature.crease.capacity() + curvature.on_crease.capacity();
+  bytes += neighbor_offsets.capacity() * sizeof(std::uint32_t) + neighbors.capacity() * sizeof(std::uint32_t);
+  bytes += neighbor_edge_lengths.capacity() * sizeof(double) + component.capacity() * sizeof(std::int32_t);
+  bytes += (vertex_faces.offsets.capacity() + vertex_faces.faces.capacity()) * sizeof(std::uint32_t);
+  bytes += face_neighbors.capacity() * 3 * sizeof(std::uint32_t) + boundary_vertex.capacity();
+  bytes += vertex_index.memory_bytes();
+  for (const auto& w : warnings) bytes += w.capacity();
+  return bytes;
+}
+
+std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options, const Cancellation* cancel) {
+  const auto start = Clock::now();
+  // OpenMesh prints add_face failures ("patch re-linking failed") to std::cerr; we handle and
+  // report every such face ourselves, so its stream is switched off once for the process.
+  static std::once_flag quiet;
+  std::call_once(quiet, [] { omerr().disable(); });
+  auto prepared = std::make_shared<PreparedMesh>();
+  PreparedMesh& pm = *prepared;
+  MeshStatistics& stats = pm.statistics;
+  pm.warnings = std::move(raw.warnings);
+  stats.file_vertices = raw.positions.size();
+  stats.file_faces = raw.source_faces;
+  count_non_manifold(raw, stats);
+  add_triangles(raw, pm, cancel);
+  if (pm.mesh.n_faces() == 0) throw GeometryError("the mesh has no usable triangle");
+
+  TriMesh& mesh = pm.mesh;
+  const std::size_t n = mesh.n_vertices();
+  stats.vertices = n;
+  stats.faces = mesh.n_faces();
+  pm.positions.resize(n);
+  for (auto v : mesh.vertices()) pm.positions[v.idx()] = to_eigen(mesh.point(v));
+  build_vertex_adjacency(pm);
+  label_components(pm);
+  measure_boundary_and_box(pm);
+  build_face_tables(pm);
 
   throw_if_cancelled(cancel);
   pm.vertex_normals = compute_vertex_normals(mesh);
@@ -254,22 +342,7 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   stats.curvature_smoothing_passes = pm.curvature.smoothing_passes;
   stats.crease_angle = pm.curvature.crease_angle;
   stats.crease_edges = pm.curvature.crease_edges;
-
-  std::vector<double> magnitudes;
-  magnitudes.reserve(n);
-  stats.curvature_min = HUGE_VAL;
-  stats.curvature_max = -HUGE_VAL;
-  for (std::uint32_t v = 0; v < n; ++v) {
-    if (pm.component[v] < 0) continue;
-    magnitudes.push_back(feature_value(pm.curvature, v, 0));
-    stats.curvature_min = std::min(stats.curvature_min, dominant_curvature(pm.curvature, v));
-    stats.curvature_max = std::max(stats.curvature_max, dominant_curvature(pm.curvature, v));
-  }
-  stats.abs_curvature_p50 = percentile(magnitudes, 0.5);
-  stats.abs_curvature_p90 = percentile(magnitudes, 0.9);
-  stats.abs_curvature_p99 = percentile(magnitudes, 0.99);
-  // A flat mesh has no curvature at all; any positive scale then works.
-  pm.curvature_scale = stats.abs_curvature_p90 > 0 ? stats.abs_curvature_p90 : 1.0 / stats.mean_edge_length;
+  measure_curvature(pm);
 
   pm.prepare_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   return prepared;

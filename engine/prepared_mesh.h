@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -14,6 +15,7 @@
 #include "engine/curvature.h"
 #include "engine/mesh_io.h"
 #include "engine/tri_mesh.h"
+#include "engine/vertex_index.h"
 
 namespace featureline {
 
@@ -50,6 +52,22 @@ struct MeshStatistics {
   std::size_t crease_edges = 0;   ///< edges sharper than that
 };
 
+/// Faces around each vertex in compressed rows: the faces of v, in increasing id order, are
+/// faces[offsets[v] .. offsets[v+1]).
+struct VertexFaces {
+  std::vector<std::uint32_t> offsets, faces;
+  const std::uint32_t* begin(std::uint32_t v) const { return faces.data() + offsets[v]; }
+  const std::uint32_t* end(std::uint32_t v) const { return faces.data() + offsets[v + 1]; }
+};
+
+/// The faces around each of n_vertices vertices of `triangles`.
+VertexFaces build_vertex_faces(const std::vector<std::array<std::uint32_t, 3>>& triangles, std::size_t n_vertices);
+
+/// Face adjacency: result[f][k] is the face on the other side of edge k = (t[k], t[k+1]) of face
+/// f, or UINT32_MAX on boundary edges and on edges with more than two faces.
+std::vector<std::array<std::uint32_t, 3>> build_face_neighbors(const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                                                               std::size_t n_vertices);
+
 struct PreparedMesh {
   TriMesh mesh;  ///< vertex i is input vertex i; duplicates made for non-manifold faces follow
   /// Input triangle index of each mesh face (faces keep input order; only dropped ones are missing).
@@ -71,6 +89,14 @@ struct PreparedMesh {
   std::vector<std::uint32_t> neighbors;
   std::vector<double> neighbor_edge_lengths;  ///< parallel to `neighbors`
   std::vector<std::int32_t> component;        ///< component id per vertex, -1 for unreferenced vertices
+  /// Face tables over `triangles`, built once here for every request that walks faces
+  /// (segmentation, the feature strip): faces around each vertex, the face across each edge
+  /// (build_face_neighbors), and whether each vertex is on an edge with one face.
+  VertexFaces vertex_faces;
+  std::vector<std::array<std::uint32_t, 3>> face_neighbors;
+  std::vector<char> boundary_vertex;
+  /// Nearest-vertex queries over the vertices that belong to a triangle (keys given as points).
+  VertexIndex vertex_index;
   /// Reference curvature magnitude: the 90th percentile of the feature value (the larger |k|;
   /// never zero). Engine stages
   /// measure curvature in units of this, so options do not depend on the mesh's scale.
@@ -80,6 +106,9 @@ struct PreparedMesh {
   double prepare_ms = 0;
 
   std::size_t n_vertices() const { return positions.size(); }
+  /// The vertex nearest p among those that belong to a triangle (the lowest id among equally
+  /// near ones). \pre p is finite.
+  std::uint32_t nearest_vertex(const Eigen::Vector3d& p) const { return vertex_index.nearest(p); }
   /// Bytes this object holds (measured from container capacities), for cache budgets.
   std::size_t memory_bytes() const;
 };

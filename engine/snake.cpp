@@ -6,11 +6,11 @@
 #include <cmath>
 
 #include "engine/errors.h"
+#include "engine/internal/geometry.h"
 
 namespace featureline {
 namespace {
 
-double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 // Barycentric coordinates of q in the plane triangle (a, b, c).
 Eigen::Vector3d barycentric_of(const Eigen::Vector2d& q, const Eigen::Vector2d& a, const Eigen::Vector2d& b,

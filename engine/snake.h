@@ -14,6 +14,7 @@
 #include "engine/enum_names.h"
 #include "engine/feature_strip.h"
 #include "engine/prepared_mesh.h"
+#include "engine/surface_point.h"
 
 namespace featureline {
 
@@ -99,13 +100,6 @@ struct SnakeResult {
 /// \throw CancelledError once `cancel` is requested (checked every iteration).
 SnakeResult refine_with_snake(const PreparedMesh& mesh, const FeatureStrip& strip, const FlatStrip& flat,
                               const SnakeOptions& options = {}, const Cancellation* cancel = nullptr);
-
-/// A point of the refined line on the original surface.
-struct SurfacePoint {
-  Eigen::Vector3d position;
-  std::uint32_t face = 0;             ///< mesh face id
-  std::array<double, 3> barycentric;  ///< w.r.t. PreparedMesh::triangles[face], sums to 1
-};
 
 /// Stage 4: maps strip points to faces, barycentric coordinates and 3D points.
 std::vector<SurfacePoint> map_to_surface(const PreparedMesh& mesh, const FeatureStrip& strip,

@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 
 packages=(g++ cmake ninja-build pkg-config git ca-certificates
   libopenmesh-dev libeigen3-dev libcpp-httplib-dev nlohmann-json3-dev libtinygltf-dev libdraco-dev
-  libgtest-dev jq curl chromium zlib1g-dev iproute2
+  libgtest-dev jq curl chromium zlib1g-dev iproute2 libnanoflann-dev
   nginx redis-server libhiredis-dev python3-yaml)
 # The fuzz build (scripts/test.sh, scripts/fuzz.sh) compiles with clang and links libFuzzer.
 case " $* " in *clang*) packages+=(clang libclang-rt-14-dev) ;; esac

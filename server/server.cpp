@@ -641,8 +641,11 @@ struct FeaturelineServer::Impl {
     const json body = json_body(req);
     const SegmentationOptions segmentation_options = parse_segmentation_options(body);
     if (!body.contains("lines")) throw InvalidInputError("\"lines\" is required");
-    const auto lines = parse_line_list(body["lines"], *session->mesh);
-    const auto results = run_lines(session, lines);
+    // Items are line requests (detected here) or lines the client already has (computed once).
+    const auto results = resolve_segmentation_lines(
+        body["lines"], *session->mesh,
+        [&](const json& item, const std::string& where) { return parse_line_request(item, *session->mesh, where); },
+        [&](const std::vector<FeatureLineRequest>& requests) { return run_lines(session, requests); });
     const SegmentationResult segments = run_on_pool([session, results, segmentation_options](const Cancellation* cancel) {
       return segment_mesh(*session->mesh, results, segmentation_options, cancel);
     });

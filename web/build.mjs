@@ -17,6 +17,7 @@ const repo = path.resolve(here, '..');
 // are found and copied too.
 const ADDONS = [
   'loaders/GLTFLoader.js',
+  'exporters/GLTFExporter.js',
   'controls/OrbitControls.js',
   'lines/Line2.js',
   'lines/LineMaterial.js',

@@ -7,6 +7,8 @@
 #include <set>
 #include <unordered_map>
 
+#include "api/feature_line_json.h"
+#include "api/segmentation_json.h"
 #include "engine/errors.h"
 #include "engine/feature_line.h"
 #include "engine/segmentation.h"
@@ -483,6 +485,152 @@ TEST(Segmentation, BadInputIsRejected) {
   SegmentationOptions options;
   options.min_segment_area_fraction = 1.5;
   EXPECT_THROW(segment_mesh(*capsule.mesh, {line}, options), InvalidInputError);
+}
+
+// A line as a client sends it back: the "refined" and "closed" of its feature-line answer.
+nlohmann::json computed_item(const FeatureLineResult& line) {
+  const auto answer = feature_line_to_json(line);
+  return {{"refined", answer["refined"]}, {"closed", answer["closed"]}};
+}
+
+void expect_same_segmentation(const SegmentationResult& a, const SegmentationResult& b) {
+  EXPECT_EQ(a.labels, b.labels);
+  ASSERT_EQ(a.segments.size(), b.segments.size());
+  for (std::size_t i = 0; i < a.segments.size(); ++i) {
+    EXPECT_EQ(a.segments[i].faces, b.segments[i].faces);
+    EXPECT_EQ(a.segments[i].area, b.segments[i].area);
+    EXPECT_EQ(a.segments[i].boundary_length, b.segments[i].boundary_length);
+  }
+  EXPECT_EQ(a.warnings, b.warnings);
+  EXPECT_EQ(a.cut_edges, b.cut_edges);
+  EXPECT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(a.source_faces, b.source_faces);
+  ASSERT_EQ(a.positions.size(), b.positions.size());
+  for (std::size_t v = 0; v < a.positions.size(); ++v) EXPECT_EQ(a.positions[v], b.positions[v]) << "vertex " << v;
+}
+
+TEST(Segmentation, ComputedLinesGiveTheSameSegmentationAsRequests) {
+  // The lines a client already has, sent back as their answers' faces and barycentric
+  // coordinates (through JSON), segment exactly as the requests that detected them: a closed
+  // loop, an open line ending on it, and a tilted plane loop whose points lie inside faces.
+  const Capsule capsule;
+  const auto& mesh = *capsule.mesh;
+  const auto equator = capsule.ring_keys(2);
+  const std::vector<FeatureLineResult> detected{
+      line_through(mesh, equator, true), line_through(mesh, {equator[0], 0, equator[2]}, false),
+      line_of(plane_loop(mesh, Eigen::Vector3d(-0.3, 0, 1), -0.6), true)};
+  std::vector<FeatureLineResult> computed;
+  for (std::size_t i = 0; i < detected.size(); ++i)
+    computed.push_back(parse_computed_line(nlohmann::json::parse(computed_item(detected[i]).dump()), mesh,
+                                           "lines[" + std::to_string(i) + "]"));
+  for (std::size_t i = 0; i < detected.size(); ++i) {
+    ASSERT_EQ(computed[i].refined.size(), detected[i].refined.size());
+    EXPECT_EQ(computed[i].closed, detected[i].closed);
+  }
+  for (auto mode : {SegmentationMode::snap, SegmentationMode::remesh}) {
+    SegmentationOptions options;
+    options.mode = mode;
+    const auto from_requests = segment_mesh(mesh, detected, options);
+    EXPECT_EQ(from_requests.segments.size(), 4u);
+    expect_same_segmentation(from_requests, segment_mesh(mesh, computed, options));
+  }
+}
+
+TEST(Segmentation, ResolvedLinesDetectOnlyTheRequestsInOneBatch) {
+  const Capsule capsule;
+  const auto& mesh = *capsule.mesh;
+  const auto loop = line_through(mesh, capsule.ring_keys(1), true);
+  const nlohmann::json lines = {computed_item(loop), {{"keys", capsule.ring_keys(3)}, {"closed", true}},
+                                computed_item(loop)};
+  std::vector<std::string> parsed_at;
+  int batches = 0;
+  const auto resolved = resolve_segmentation_lines(
+      lines, mesh,
+      [&](const nlohmann::json& item, const std::string& where) {
+        parsed_at.push_back(where);
+        FeatureLineRequest request;
+        request.keys = item["keys"].get<std::vector<std::uint32_t>>();
+        request.closed = item["closed"].get<bool>();
+        return request;
+      },
+      [&](const std::vector<FeatureLineRequest>& requests) {
+        ++batches;
+        std::vector<FeatureLineResult> out;
+        for (const auto& r : requests) out.push_back(detect_feature_line(mesh, r));
+        return out;
+      });
+  EXPECT_EQ(batches, 1);
+  EXPECT_EQ(parsed_at, std::vector<std::string>{"lines[1]"});
+  ASSERT_EQ(resolved.size(), 3u);
+  EXPECT_EQ(resolved[1].keys, capsule.ring_keys(3));  // the detected one, in its place
+  EXPECT_EQ(resolved[0].refined.size(), loop.refined.size());
+  EXPECT_EQ(segment_mesh(mesh, resolved).segments.size(), 3u);  // the duplicate loop cuts nothing new
+  // Every line computed: no detection at all.
+  batches = 0;
+  resolve_segmentation_lines(nlohmann::json::array({computed_item(loop)}), mesh, nullptr,
+                             [&](const std::vector<FeatureLineRequest>&) {
+                               ++batches;
+                               return std::vector<FeatureLineResult>{};
+                             });
+  EXPECT_EQ(batches, 0);
+}
+
+// The InvalidInputError message of parsing `item` as lines[0].
+std::string computed_line_error(const PreparedMesh& mesh, const nlohmann::json& item) {
+  try {
+    parse_computed_line(item, mesh, "lines[0]");
+  } catch (const InvalidInputError& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+TEST(Segmentation, ComputedLineErrorsNameTheField) {
+  const Capsule capsule;
+  const auto& mesh = *capsule.mesh;
+  const std::string faces = std::to_string(mesh.triangles.size());
+  auto item = [](nlohmann::json face_ids, nlohmann::json barycentric) {
+    return nlohmann::json{{"refined", {{"faces", std::move(face_ids)}, {"barycentric", std::move(barycentric)}}}};
+  };
+  const nlohmann::json w = {0.2, 0.3, 0.5};
+  EXPECT_EQ(computed_line_error(mesh, item({1, 2}, {w, w})), "(accepted)");
+  EXPECT_EQ(computed_line_error(mesh, item({1, mesh.triangles.size()}, {w, w})),
+            "lines[0].refined, point 1: face " + faces + " is out of range (the mesh has " + faces + " faces)");
+  EXPECT_EQ(computed_line_error(mesh, item({1, 4294967297ULL}, {w, w})),
+            "lines[0].refined, point 1: face 4294967297 is out of range (the mesh has " + faces + " faces)");
+  EXPECT_EQ(computed_line_error(mesh, item({1, -2}, {w, w})), "lines[0].refined, point 1: the face must be an integer >= 0");
+  EXPECT_EQ(computed_line_error(mesh, item({1, 2}, {w, {0.5, 0.5, 0.5}})),
+            "lines[0].refined, point 1: barycentric coordinates must sum to 1");
+  EXPECT_EQ(computed_line_error(mesh, item({1, 2}, {{-0.5, 1.0, 0.5}, w})),
+            "lines[0].refined, point 0: barycentric coordinates must be finite and non-negative");
+  EXPECT_EQ(computed_line_error(mesh, item({1, 2}, {w, {0.5, 0.5}})),
+            "lines[0].refined, point 1: barycentric coordinates must be an array of three numbers");
+  EXPECT_EQ(computed_line_error(mesh, item({1, 2, 3}, {w, w})), "lines[0].refined has 3 faces but 2 barycentric triples");
+  EXPECT_EQ(computed_line_error(mesh, item({1}, {w})), "lines[0].refined needs at least two points");
+  EXPECT_EQ(computed_line_error(mesh, {{"refined", {{"faces", {1, 2}}}}}),
+            "lines[0].refined.barycentric must be an array of [w0, w1, w2] triples");
+  auto with_options = item({1, 2}, {w, w});
+  with_options["options"] = nlohmann::json::object();
+  EXPECT_EQ(computed_line_error(mesh, with_options),
+            "unknown field \"lines[0].options\" in a computed line (it has \"refined\", \"closed\" and \"keys\")");
+  auto keys_text = item({1, 2}, {w, w});
+  keys_text["keys"] = "1,2";
+  EXPECT_EQ(computed_line_error(mesh, keys_text), "lines[0].keys must be an array (the keys the line was detected from)");
+  auto with_keys = item({1, 2}, {w, w});
+  with_keys["keys"] = {5, 7};
+  EXPECT_EQ(computed_line_error(mesh, with_keys), "(accepted)");
+  auto closed_text = item({1, 2}, {w, w});
+  closed_text["closed"] = "yes";
+  EXPECT_EQ(computed_line_error(mesh, closed_text), "lines[0].closed must be true or false");
+  // The answer's whole "refined" (with points and length) is accepted; positions come from the faces.
+  auto whole = item({1, 2}, {w, w});
+  whole["refined"]["points"] = {{9, 9, 9}, {9, 9, 9}};
+  whole["refined"]["length"] = 1;
+  const auto line = parse_computed_line(whole, mesh, "lines[0]");
+  const auto& t = mesh.triangles[2];
+  EXPECT_EQ(line.refined[1].position,
+            Eigen::Vector3d(0.2 * mesh.positions[t[0]] + 0.3 * mesh.positions[t[1]] + 0.5 * mesh.positions[t[2]]));
+  EXPECT_THROW(resolve_segmentation_lines(nlohmann::json::array(), mesh, nullptr, nullptr), InvalidInputError);
 }
 
 }  // namespace

@@ -255,6 +255,36 @@ expect "a line that closes no region" 422 unprocessable_geometry POST "$SEG" "$T
 echo '{"lines": [{"keys": [820, 860]}], "mode": "sideways"}' >"$T/seg_bad.req"
 http "$T/seg_bad.json" -H 'Content-Type: application/json' --data-binary @"$T/seg_bad.req" "$B$SEG"
 expect "an unknown segmentation mode" 400 invalid_request POST "$SEG" "$T/seg_bad.json"
+# Lines computed before (a feature-line answer's refined faces and barycentrics) segment exactly
+# as the requests that detect them, alone or mixed with a request; bad ones get exact errors.
+echo '{"keys": [820, 860]}' >"$T/seg_line.req"
+http "$T/seg_line.json" -H 'Content-Type: application/json' --data-binary @"$T/seg_line.req" "$B/v1/meshes/$S/feature-lines"
+check_eq "the line to segment with, detected once: 200" "$STATUS" 200
+for mode in snap remesh; do
+  jq -c --arg mode "$mode" '{lines: [{keys, closed, refined}], mode: $mode}' "$T/seg_line.json" >"$T/seg_computed_$mode.req"
+  validate_request "segmentation request with a computed line ($mode) matches the contract" POST "$SEG" "$T/seg_computed_$mode.req"
+  http "$T/seg_computed_$mode.json" -H 'Content-Type: application/json' --data-binary @"$T/seg_computed_$mode.req" "$B$SEG"
+  expect "segmentation along a computed line ($mode)" 200 - POST "$SEG" "$T/seg_computed_$mode.json"
+  check_eq "$mode: a computed line gives the labels and parts of its request" \
+    "$(jq -c '[.labels, [.segments[] | .area, .faces], .remeshed]' "$T/seg_computed_$mode.json")" \
+    "$(jq -c '[.labels, [.segments[] | .area, .faces], .remeshed]' "$T/seg_$mode.json")"
+done
+check_eq "segments carry their colours (sRGB)" "$(jq -c '[.segments[].color | length == 3 and all(. >= 0 and . <= 1)] | all' "$T/seg_snap.json")" true
+jq -c '{lines: [{keys, closed, refined: {faces: .refined.faces, barycentric: .refined.barycentric}}, {keys: [820, 860]}]}' \
+  "$T/seg_line.json" >"$T/seg_mixed.req"
+http "$T/seg_mixed.json" -H 'Content-Type: application/json' --data-binary @"$T/seg_mixed.req" "$B$SEG"
+expect "segmentation with a computed line and a line request" 200 - POST "$SEG" "$T/seg_mixed.json"
+check_eq "mixed: the same two parts" "$(jq -c '[.segments[].area]' "$T/seg_mixed.json")" "$(jq -c '[.segments[].area]' "$T/seg_snap.json")"
+jq -c '{lines: [{refined: {faces: (.refined.faces | .[1] = 3200), barycentric: .refined.barycentric}}]}' "$T/seg_line.json" >"$T/seg_badface.req"
+http "$T/seg_badface.json" -H 'Content-Type: application/json' --data-binary @"$T/seg_badface.req" "$B$SEG"
+expect "a computed line with a face out of range" 400 invalid_request POST "$SEG" "$T/seg_badface.json"
+check_eq "the error names the point and the face count" "$(jq -r .error.message "$T/seg_badface.json")" \
+  "lines[0].refined, point 1: face 3200 is out of range (the mesh has 3200 faces)"
+jq -c '{lines: [{refined: {faces: .refined.faces, barycentric: (.refined.barycentric | .[2] = [0.5, 0.5, 0.5])}}]}' "$T/seg_line.json" >"$T/seg_badbary.req"
+http "$T/seg_badbary.json" -H 'Content-Type: application/json' --data-binary @"$T/seg_badbary.req" "$B$SEG"
+expect "a computed line with barycentric coordinates not summing to 1" 400 invalid_request POST "$SEG" "$T/seg_badbary.json"
+check_eq "the error names the point" "$(jq -r .error.message "$T/seg_badbary.json")" \
+  "lines[0].refined, point 2: barycentric coordinates must sum to 1"
 
 # ---- 4. mesh.glb and curvature ------------------------------------------------------------------
 echo "# 4. mesh.glb, curvature"

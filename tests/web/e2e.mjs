@@ -247,6 +247,15 @@ async function run() {
   await page.uncheck('#curvature-toggle');
 
   // ---- decomposition by the real server: the border-to-border line cuts the field in two -----------
+  // Requests are counted: one POST /segmentation per Decompose, carrying the lines the page
+  // already has (computed once, not detected again), and nothing asked again as GLB.
+  const apiRequests = [];
+  const countRequest = (r) => {
+    const u = new URL(r.url());
+    if (u.pathname.startsWith('/v1/')) apiRequests.push({ what: `${r.method()} ${u.pathname.replace(/meshes\/[^/]+/, 'meshes/ID')}${u.search}`, body: r.postData() });
+  };
+  const segmentationPosts = () => apiRequests.filter((r) => r.what.startsWith('POST /v1/meshes/ID/segmentation'));
+  page.on('request', countRequest);
   await page.click('#decompose');
   await until('the decomposition to finish', async () => {
     const t = await state();
@@ -262,6 +271,34 @@ async function run() {
       `the two large parts are real halves (areas ${seg.segments.map((x) => x.area.toFixed(3)).join(', ')})`);
     check((await page.locator('#segments tbody tr').count()) === seg.segments.length + 1, 'the segments and their areas are listed');
   }
+  let sent = JSON.parse(segmentationPosts()[0]?.body ?? 'null');
+  check(segmentationPosts().length === 1 && apiRequests.length === 1 && sent?.lines?.length === 2 && sent.lines.every((l) => Array.isArray(l.refined?.faces) && l.refined.faces.length === l.refined.barycentric.length),
+    'one segmentation request per Decompose, sending the lines the page already has (faces and barycentric coordinates)',
+    () => JSON.stringify(apiRequests.map((r) => r.what)));
+  check(seg && seg.segments.every((x) => Array.isArray(x.color)) &&
+    (await page.locator('#segments .swatch').first().evaluate((e) => getComputedStyle(e).backgroundColor)) ===
+      `rgb(${seg.segments[0].color.map((c) => Math.round(c * 255)).join(', ')})`,
+    'the swatches show the colours the server answers');
+  // Remesh mode: the parts are drawn from the answer itself, and downloaded from it too.
+  apiRequests.length = 0;
+  await page.selectOption('#decompose-mode', 'remesh');
+  await page.click('#decompose');
+  await until('the remesh decomposition', async () => (await page.evaluate(() => window.featureline.sceneStats())).segmentSceneShown, 30000);
+  s = await state();
+  sent = JSON.parse(segmentationPosts()[0]?.body ?? 'null');
+  check(!s.segmentation.faceColored && s.segmentation.remeshed.faces.length === s.segmentation.labels.length &&
+    segmentationPosts().length === 1 && apiRequests.length === 1 && sent?.mode === 'remesh' && sent.lines.every((l) => l.refined),
+    'remesh mode: one request, its answer\'s remeshed parts drawn (no GLB asked for, no line detected again)',
+    () => JSON.stringify(apiRequests.map((r) => r.what)));
+  const [remeshDownload] = await Promise.all([page.waitForEvent('download'), page.click('#download-segmented')]);
+  const remeshPath = path.join(tmp, 'segments.glb');
+  await remeshDownload.saveAs(remeshPath);
+  const remeshGlb = fs.readFileSync(remeshPath);
+  check(remeshGlb.subarray(0, 4).toString() === 'glTF' && apiRequests.length === 1,
+    `the remeshed parts download as GLB written from the answer, with no request (${remeshGlb.length} bytes)`);
+  page.off('request', countRequest);
+  await page.uncheck('#segments-toggle');
+  await page.selectOption('#decompose-mode', 'snap');
 
   // ---- the screenshot -------------------------------------------------------------------------------
   await page.click('#line-list li:first-child .name');

@@ -204,8 +204,10 @@ export async function featureLinesGlb(meshId, body) {
   return (await postJson(`/v1/meshes/${meshId}/feature-lines?format=glb`, body, { accept: 'model/gltf-binary' })).blob();
 }
 
-// POST /v1/meshes/{id}/segmentation {"lines": [LineRequest...], "mode"} ->
-// {"labels": [per face], "segments": [{label, faces, area, boundary_length}], "warnings": []}.
+// POST /v1/meshes/{id}/segmentation {"lines": [LineRequest or ComputedLine...], "mode"} ->
+// {"labels": [per face], "segments": [{label, faces, area, boundary_length, color}], "warnings": [],
+//  "remeshed": {vertices, faces, source_faces} in remesh mode}. A ComputedLine ({keys, closed,
+// refined: {faces, barycentric}}) is a line the page already has: the server does not detect it again.
 export async function segmentation(meshId, body) {
   return (await postJson(`/v1/meshes/${meshId}/segmentation`, body)).json();
 }

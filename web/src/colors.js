@@ -50,20 +50,6 @@ export function curvatureRange(values) {
   return max > 0 ? max : 1;
 }
 
-function hslToRgb(h, s, l) {
-  const k = (n) => (n + h * 12) % 12;
-  const a = s * Math.min(l, 1 - l);
-  const f = (n) => l - a * Math.max(-1, Math.min(k(n) - 3, Math.min(9 - k(n), 1)));
-  return [f(0), f(8), f(4)];
-}
-
-// A distinct colour for segment label i (golden-ratio hue steps, alternating lightness).
-export function labelColor(i) {
-  const h = ((i * 0.618033988749895) % 1 + 1) % 1;
-  const l = i % 2 === 0 ? 0.58 : 0.46;
-  return hslToRgb(h, 0.62, l);
-}
-
 export function rgbCss([r, g, b]) {
   return `rgb(${Math.round(r * 255)} ${Math.round(g * 255)} ${Math.round(b * 255)})`;
 }

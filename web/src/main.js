@@ -2,12 +2,12 @@
 // tune options, decompose the mesh along the lines, download the results; undo and redo every
 // edit, save and load the work as a session file.
 import * as api from './api.js';
-import { curvatureRange, diverging, divergingCss, labelColor, rgbCss } from './colors.js';
+import { curvatureRange, diverging, divergingCss, rgbCss } from './colors.js';
 import { guessUpAxis, looksLikeCad, ringNeighbourhood, sharpEdges, strongestFeatureVertex, vertexAdjacency } from './geometry.js';
 import { History } from './history.js';
 import { parseSession, rememberUpAxis, rememberedUpAxis, sessionDocument } from './session.js';
 import { oneBasedNumbers } from './text.js';
-import { Viewer, parseGlb, indexedMeshFromGltf } from './viewer.js';
+import { Viewer, parseGlb, indexedMeshFromGltf, segmentedSurface, exportGlb } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -360,7 +360,7 @@ function applyColors() {
   if ($('segments-toggle').checked && seg) {
     if (seg.faceColored) {
       const labels = seg.answer.labels;
-      viewer.setFaceColors((f) => (labels[f] >= 0 ? labelColor(labels[f]) : [0.5, 0.5, 0.5]));
+      viewer.setFaceColors((f) => segmentColor(seg, labels[f]));
     } else {
       viewer.showSegmentScene(true);
     }
@@ -946,6 +946,21 @@ function readyLines() {
   return state.lines.filter((l) => !keysProblem(l)).map(lineRequest);
 }
 
+// A line for the decomposition: the line the page already has when its answer is current
+// (computed once: the server only cuts along it), else its request (the server detects it).
+function segmentationItem(line) {
+  const refined = line.result?.refined;
+  if (!isStale(line) && Array.isArray(refined?.faces) && Array.isArray(refined?.barycentric))
+    return { keys: [...line.keys], closed: line.closed, refined: { faces: refined.faces, barycentric: refined.barycentric } };
+  return lineRequest(line);
+}
+
+// The server's colour of a segment label (its answer carries the one palette, the same as in
+// its GLB); grey for an answer without colours.
+function segmentColor(seg, label) {
+  return seg.answer.segments[label]?.color ?? [0.5, 0.5, 0.5];
+}
+
 function clearSegmentation() {
   state.segmentation = null;
   state.decomposeMessage = '';
@@ -960,7 +975,8 @@ function clearSegmentation() {
 async function decompose() {
   if (!state.mesh) return;
   $('decompose-section').open = true;
-  const lines = readyLines();
+  const ready = state.lines.filter((l) => !keysProblem(l));
+  const lines = ready.map(segmentationItem);
   const status = $('decompose-status');
   status.classList.remove('error');
   if (!lines.length) {
@@ -976,7 +992,7 @@ async function decompose() {
   try {
     const answer = await api.withRetry(() => api.segmentation(meshId, request), { onRetry: (r) => retryNotice('Decomposing', r) });
     if (state.mesh?.id !== meshId) return;
-    await applySegmentation(request, answer);
+    await applySegmentation(request, answer, JSON.stringify(ready.map(lineRequest)));
   } catch (e) {
     let text = `Decomposition failed: ${serverText(e)}`;
     if (e instanceof api.ApiError && (e.status === 404 || e.status === 405)) {
@@ -998,19 +1014,35 @@ async function decompose() {
   }
 }
 
-async function applySegmentation(request, answer) {
+// The segmented surface of an answer as three.js objects: the remeshed surface it carries
+// (remesh mode), or the page's mesh with the answer's labels (snap mode); null when the answer
+// carries neither.
+function segmentedObject(seg) {
+  const { answer } = seg;
+  const colorOf = (label) => segmentColor(seg, label);
+  const remeshed = answer.remeshed;
+  if (Array.isArray(remeshed?.vertices) && Array.isArray(remeshed?.faces))
+    return segmentedSurface(remeshed.vertices.flat(), remeshed.faces.flat(), answer.labels, colorOf);
+  if (seg.faceColored && viewer.mesh) return segmentedSurface(viewer.mesh.positions, viewer.mesh.index, answer.labels, colorOf);
+  return null;
+}
+
+// linesKey: the line requests the answer is for (to tell when it is out of date).
+async function applySegmentation(request, answer, linesKey) {
   if (!answer || !Array.isArray(answer.labels) || !Array.isArray(answer.segments))
     throw new api.ApiError(0, '', 'the server answered the decomposition in an unknown shape');
   const faceColored = answer.labels.length === state.mesh.faceCount;
-  const seg = { request, linesKey: JSON.stringify(request.lines), answer, faceColored, sceneLoaded: false };
+  const seg = { request, linesKey, answer, faceColored, sceneLoaded: false };
   viewer.setSegmentScene(null);
   state.segmentation = seg;
   const parts = [`${answer.segments.length} segment(s)`];
   if (!faceColored) {
-    // Remesh mode: the labels are for the remeshed surface; show the server's segmented GLB.
+    // Remesh mode: the labels are for the remeshed surface, which the answer carries; an
+    // answer without it (an older server) is asked for once more as GLB.
     try {
-      const blob = await api.segmentationGlb(state.mesh.id, request);
-      viewer.setSegmentScene(await parseGlb(await blob.arrayBuffer()));
+      const surface = segmentedObject(seg);
+      if (surface) viewer.setSegmentScene(surface);
+      else viewer.setSegmentScene((await parseGlb(await (await api.segmentationGlb(state.mesh.id, request)).arrayBuffer())).scene);
       seg.sceneLoaded = true;
     } catch (e) {
       parts.push(`the labels are for a remeshed surface of ${answer.labels.length} faces; its colours cannot be shown (${errorText(e)})`);
@@ -1053,7 +1085,7 @@ function renderSegments() {
     const sw = document.createElement('td');
     const box = document.createElement('span');
     box.className = 'swatch';
-    box.style.background = rgbCss(labelColor(s.label));
+    box.style.background = rgbCss(segmentColor(seg, s.label));
     sw.appendChild(box);
     tr.appendChild(sw);
     // Labels are shown from 1, like every other count on the page.
@@ -1108,20 +1140,23 @@ async function downloadLines(format) {
   }
 }
 
+// Saves the decomposition the page already has as GLB (one mesh per part, the answer's
+// colours), written in the page: no request.
 async function downloadSegmented() {
   const seg = state.segmentation;
   if (!seg || !state.mesh) return;
   try {
-    saveBlob(await api.segmentationGlb(state.mesh.id, seg.request), `${baseName()}-segments.glb`);
-  } catch (e) {
-    if (e instanceof api.ApiError && (e.code === 'no_glb' || [400, 404, 406, 415].includes(e.status))) {
-      // No GLB from the server: save the labels and segments instead.
+    const object = segmentedObject(seg) ?? viewer.segmentGroup.children[0];
+    if (!object) {
+      // Nothing to write as GLB: save the labels and segments instead.
       const doc = { mesh_id: state.mesh.id, ...seg.answer };
       saveBlob(new Blob([JSON.stringify(doc)], { type: 'application/json' }), `${baseName()}-segments.json`);
-      showMessage('The server has no GLB for segmentations; saved the labels as JSON.');
-    } else {
-      showMessage(`Download failed: ${errorText(e)}`, { error: true });
+      showMessage('Saved the labels and segments as JSON (the answer carries no surface to write as GLB).');
+      return;
     }
+    saveBlob(new Blob([await exportGlb(object)], { type: 'model/gltf-binary' }), `${baseName()}-segments.glb`);
+  } catch (e) {
+    showMessage(`Download failed: ${errorText(e)}`, { error: true });
   }
 }
 

@@ -3,6 +3,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { GLTFExporter } from 'three/addons/exporters/GLTFExporter.js';
 import { Line2 } from 'three/addons/lines/Line2.js';
 import { LineMaterial } from 'three/addons/lines/LineMaterial.js';
 import { LineGeometry } from 'three/addons/lines/LineGeometry.js';
@@ -24,6 +25,38 @@ const KEY_PIXELS = 7; // key marker radius on screen
 // A press within this many pixels of a key's centre is on its marker (grab or select it);
 // anywhere else places a new key, so keys can sit close together.
 export const KEY_HIT_PIXELS = KEY_PIXELS + 2;
+
+// A labelled surface as three.js objects: one mesh per label (named segment_<label>, like the
+// server's GLB), sharing the positions. vertices: flat [x, y, z, ...]; faces: flat corner ids;
+// labels: one per face; colorOf(label) -> sRGB triple (the server's palette, from its answer).
+export function segmentedSurface(vertices, faces, labels, colorOf) {
+  const group = new THREE.Group();
+  group.name = 'segments';
+  const position = new THREE.Float32BufferAttribute(vertices, 3);
+  const byLabel = new Map();
+  for (let f = 0; f < labels.length; ++f) {
+    if (!byLabel.has(labels[f])) byLabel.set(labels[f], []);
+    byLabel.get(labels[f]).push(faces[3 * f], faces[3 * f + 1], faces[3 * f + 2]);
+  }
+  for (const label of [...byLabel.keys()].sort((a, b) => a - b)) {
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', position);
+    geometry.setIndex(byLabel.get(label));
+    geometry.computeVertexNormals();
+    const [r, g, b] = colorOf(label);
+    const material = new THREE.MeshStandardMaterial({ roughness: 0.8, metalness: 0 });
+    material.color.setRGB(r, g, b, THREE.SRGBColorSpace);
+    const mesh = new THREE.Mesh(geometry, material);
+    mesh.name = `segment_${label}`;
+    group.add(mesh);
+  }
+  return group;
+}
+
+// The object as a GLB (ArrayBuffer), written in the page: what is shown is what is saved.
+export function exportGlb(object) {
+  return new GLTFExporter().parseAsync(object, { binary: true });
+}
 
 export function parseGlb(arrayBuffer) {
   return new Promise((resolve, reject) => {
@@ -307,12 +340,12 @@ export class Viewer {
     this.showSegmentScene(false);
   }
 
-  // A separate segmented surface (remesh mode: the server's own GLB), shown instead of the
-  // mesh; picking still uses the mesh.
-  setSegmentScene(gltf) {
+  // A separate segmented surface (remesh mode: built from the server's answer, or its GLB's
+  // scene), shown instead of the mesh; picking still uses the mesh.
+  setSegmentScene(object) {
     this.clearGroup(this.segmentGroup);
-    if (!gltf) return;
-    gltf.scene.traverse((o) => {
+    if (!object) return;
+    object.traverse((o) => {
       if (o.isMesh) {
         const materials = Array.isArray(o.material) ? o.material : [o.material];
         for (const m of materials) {
@@ -323,7 +356,7 @@ export class Viewer {
         }
       }
     });
-    this.segmentGroup.add(gltf.scene);
+    this.segmentGroup.add(object);
   }
 
   showSegmentScene(on) {

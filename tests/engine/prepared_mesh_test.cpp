@@ -1,0 +1,118 @@
+// The tables prepare_mesh builds once for every request: faces around vertices, the face across
+// each edge, boundary vertices (checked against OpenMesh's own halfedge structure), and the
+// nearest-vertex index (checked against known nearest vertices and a scan over every vertex).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "engine/prepared_mesh.h"
+#include "tests/support/synthetic_meshes.h"
+
+namespace featureline {
+namespace {
+
+using namespace featureline::testing;
+constexpr std::uint32_t kNone = UINT32_MAX;
+
+// Every table entry against OpenMesh: the face across each directed face edge, the faces
+// around each vertex, and which vertices are on the boundary.
+void expect_tables_match_openmesh(const PreparedMesh& pm) {
+  const TriMesh& mesh = pm.mesh;
+  ASSERT_EQ(pm.face_neighbors.size(), pm.triangles.size());
+  for (std::uint32_t f = 0; f < pm.triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const auto& t = pm.triangles[f];
+      const auto h = mesh.find_halfedge(TriMesh::VertexHandle(int(t[k])), TriMesh::VertexHandle(int(t[(k + 1) % 3])));
+      ASSERT_TRUE(h.is_valid());
+      ASSERT_EQ(mesh.face_handle(h).idx(), int(f));
+      const auto across = mesh.opposite_face_handle(h);
+      EXPECT_EQ(pm.face_neighbors[f][k], across.is_valid() ? std::uint32_t(across.idx()) : kNone) << "face " << f;
+    }
+  for (auto v : mesh.vertices()) {
+    std::vector<std::uint32_t> expected;
+    for (auto f : mesh.vf_range(v)) expected.push_back(std::uint32_t(f.idx()));
+    std::sort(expected.begin(), expected.end());
+    const auto id = std::uint32_t(v.idx());
+    EXPECT_EQ(std::vector<std::uint32_t>(pm.vertex_faces.begin(id), pm.vertex_faces.end(id)), expected) << "vertex " << id;
+    if (!expected.empty()) {
+      EXPECT_EQ(pm.boundary_vertex[id] != 0, mesh.is_boundary(v)) << "vertex " << id;
+    }
+  }
+}
+
+TEST(PreparedMesh, FaceTablesMatchOpenMeshOnClosedAndOpenMeshes) {
+  const auto closed = prepare_mesh(make_capsule(1, 2, 24, 6, 4));
+  expect_tables_match_openmesh(*closed);
+  EXPECT_EQ(std::count(closed->boundary_vertex.begin(), closed->boundary_vertex.end(), 1), 0);
+  const auto tube = prepare_mesh(make_cylinder(1, 2, 5, 16, false));
+  expect_tables_match_openmesh(*tube);
+  EXPECT_EQ(std::count(tube->boundary_vertex.begin(), tube->boundary_vertex.end(), 1), 32);  // two rims of 16
+}
+
+TEST(PreparedMesh, NonManifoldInputGetsSeparateFacesInTheTables) {
+  // Three triangles on edge (0, 1): the third gets its own vertex copies (3, 4, 5 -> 5, 6, 7),
+  // so every edge of the tables has at most two faces.
+  RawMesh raw;
+  raw.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
+  raw.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+  raw.source_faces = 3;
+  const auto pm = prepare_mesh(raw);
+  ASSERT_EQ(pm->n_vertices(), 8u);
+  expect_tables_match_openmesh(*pm);
+  EXPECT_EQ(pm->face_neighbors[0][0], 1u);
+  EXPECT_EQ(pm->face_neighbors[2], (std::array<std::uint32_t, 3>{kNone, kNone, kNone}));
+  // The copies sit on their originals: the nearest vertex is the original (the lowest id);
+  // vertex 4's only triangle took the copy 7, so 4 belongs to no triangle and 7 answers.
+  EXPECT_EQ(pm->nearest_vertex(Eigen::Vector3d(0, 0, 0)), 0u);
+  EXPECT_EQ(pm->nearest_vertex(Eigen::Vector3d(1.2, 0.01, 0.01)), 1u);
+  EXPECT_EQ(pm->component[4], -1);
+  EXPECT_EQ(pm->nearest_vertex(Eigen::Vector3d(0, 0, 2)), 7u);
+}
+
+TEST(PreparedMesh, NearestVertexIsTheGridPointNearest) {
+  // A regular 11 x 11 grid over [-1, 1]^2 (spacing 0.2): the point just off grid point (i, j)
+  // is nearest vertex j * 11 + i.
+  const auto pm = prepare_mesh(make_plane_grid(11, 0, 1));
+  for (int j = 0; j < 11; ++j)
+    for (int i = 0; i < 11; ++i) {
+      const Eigen::Vector3d p(-1 + 0.2 * i + 0.07, -1 + 0.2 * j - 0.06, 0.3);
+      EXPECT_EQ(pm->nearest_vertex(p), std::uint32_t(j * 11 + i)) << i << ", " << j;
+    }
+}
+
+TEST(PreparedMesh, NearestVertexAgreesWithAScanAndSkipsUnreferencedVertices) {
+  RawMesh raw = make_capsule(1, 2, 32, 8, 6);
+  // An unreferenced vertex at the query point itself is never the answer.
+  raw.positions.push_back({0.05, 0.05, 3.0});
+  const auto pm = prepare_mesh(raw);
+  const auto unreferenced = std::uint32_t(raw.positions.size() - 1);
+  EXPECT_NE(pm->nearest_vertex(Eigen::Vector3d(0.05, 0.05, 3.0)), unreferenced);
+  EXPECT_EQ(pm->nearest_vertex(Eigen::Vector3d(0.05, 0.05, 3.0)), 0u);  // the north pole
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> coordinate(-2.5, 2.5);
+  for (int q = 0; q < 2000; ++q) {
+    const Eigen::Vector3d p(coordinate(random), coordinate(random), coordinate(random));
+    std::uint32_t best = 0;
+    double best_d = HUGE_VAL;
+    for (std::uint32_t v = 0; v < pm->n_vertices(); ++v) {
+      if (pm->component[v] < 0) continue;
+      const double d = (pm->positions[v] - p).squaredNorm();
+      if (d < best_d) best_d = d, best = v;
+    }
+    ASSERT_EQ(pm->nearest_vertex(p), best) << "query " << q;
+  }
+}
+
+TEST(PreparedMesh, MemoryCountsTheTables) {
+  const auto pm = prepare_mesh(make_capsule(1, 2, 32, 8, 6));
+  const std::size_t tables = (pm->vertex_faces.offsets.size() + pm->vertex_faces.faces.size()) * 4 +
+                             pm->face_neighbors.size() * 12 + pm->boundary_vertex.size();
+  EXPECT_GE(pm->memory_bytes(), tables + pm->vertex_index.memory_bytes());
+  EXPECT_GT(pm->vertex_index.memory_bytes(), pm->n_vertices() * 4);  // at least the id list
+}
+
+}  // namespace
+}  // namespace featureline
