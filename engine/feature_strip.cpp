@@ -366,8 +366,13 @@ FlatStrip flatten_strip(const PreparedMesh& pm, const FeatureStrip& strip, const
     mark_valid_triangles(pm, strip, options, paper);
     // Automatic: the paper's layout is exact on developable strips and costs a fraction of a
     // sparse solve; only where it drops triangles from the snake's domain is the solve worth it.
+    // bench_accuracy: the 24k-triangle valley at 20% noise refines to 0.154 grid spacings when
+    // strips losing 3-5% keep the paper's layout, 0.133 when they are solved (the same as
+    // solving every strip); every other figure is the same at 1%, 3% and 5%.
+    constexpr double kMaxDroppedShare = 0.03;
     const double dropped = double(paper.distorted_triangles + paper.flipped_triangles);
-    if (options.flattening == StripFlattening::similar_triangles || dropped <= 0.05 * double(strip.triangles.size()))
+    if (options.flattening == StripFlattening::similar_triangles ||
+        dropped <= kMaxDroppedShare * double(strip.triangles.size()))
       return paper;
   }
   FlatStrip conformal = unplaced();
