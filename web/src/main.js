@@ -186,30 +186,31 @@ async function openMesh(name, bytes, format, { keepLines = false, confirmed = fa
   }
 }
 
-// Expected bytes of the server's mesh.glb (positions, normals, curvature, 32-bit indices) to
-// show download progress when the answer is compressed and its decoded size is unknown.
+// Expected bytes of the server's compact mesh.glb (8 bytes a vertex, indices of 1, 2 or 4
+// bytes) to show download progress when the answer is compressed and its decoded size is
+// unknown.
 function expectedGlbBytes(d) {
-  return d.vertices * 28 + d.faces * 12 + 2048;
+  const indexBytes = d.vertices < 0xff ? 1 : d.vertices < 0xffff ? 2 : 4;
+  return d.vertices * 8 + d.faces * 3 * indexBytes + 2048;
 }
 
 async function showServerMesh(description, name, { keepLines = false } = {}) {
   const id = description.mesh_id;
   setProgress(true, 0, 'downloading the prepared mesh…');
   let progressEvents = 0;
-  const [glb, curvature] = await Promise.all([
-    api.withRetry(() =>
-      api.meshGlb(id, {
-        expectedBytes: expectedGlbBytes(description),
-        onProgress: ({ received, total }) => {
-          progressEvents++;
-          setProgress(true, total ? Math.min(0.99, received / total) : null, `downloading the prepared mesh: ${formatBytes(received)}${total ? ` of about ${formatBytes(total)}` : ''}`);
-        },
-      }),
-    ),
-    api.withRetry(() => api.curvature(id)),
-  ]);
+  const glb = await api.withRetry(() =>
+    api.meshGlb(id, {
+      expectedBytes: expectedGlbBytes(description),
+      onProgress: ({ received, total }) => {
+        progressEvents++;
+        setProgress(true, total ? Math.min(0.99, received / total) : null, `downloading the prepared mesh: ${formatBytes(received)}${total ? ` of about ${formatBytes(total)}` : ''}`);
+      },
+    }),
+  );
   state.download = { received: glb.bytes.byteLength, wireBytes: glb.wireBytes, encoding: glb.encoding, progressEvents };
   const mesh = indexedMeshFromGltf(await parseGlb(glb.bytes));
+  // The compact GLB carries the curvature (16-bit over its range); /curvature only without it.
+  const curvature = mesh.curvature ?? (await api.withRetry(() => api.curvature(id)));
   if (keepLines && state.mesh && mesh.vertexCount !== state.mesh.vertexCount)
     throw new Error(`the file now has ${mesh.vertexCount} vertices, not ${state.mesh.vertexCount}; the keys would not match`);
   const sameFile = state.mesh && state.mesh.name === name && state.mesh.vertexCount === mesh.vertexCount;
@@ -1698,6 +1699,13 @@ window.featureline = {
   pickVertexAt(x, y) {
     return viewer.pickVertex(x, y);
   },
+  // What one pointer move over the mesh does (pick, snap, read-out, preview), and the face
+  // three.js's own raycast (every triangle) finds there: tests time both and compare.
+  hoverAt(x, y) {
+    hoverFeedback(x, y);
+    return $('readout').hidden ? null : $('readout').textContent;
+  },
+  threeRaycastAt: (x, y) => viewer.pickFaceWithThree(x, y),
   extremeVertex: (axis, largest) => viewer.extremeVertex(axis, largest),
   sceneStats: () => viewer.sceneStats(),
   probe: () => viewer.probe(),

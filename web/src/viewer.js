@@ -421,7 +421,16 @@ export class Viewer {
       const d = dx * dx + dy * dy + dz * dz;
       if (d < bestD) (bestD = d), (best = v);
     }
-    return { vertex: best, face: f, point: hit.point.toArray() };
+    return { vertex: best, face: f, point: hit.point.toArray(), distance: hit.t };
+  }
+
+  // three.js's raycast of the drawn mesh (tests every triangle): {face, distance} or null. The
+  // reference that pickVertex's grid must agree with.
+  pickFaceWithThree(clientX, clientY) {
+    if (!this.displayMesh) return null;
+    this.raycaster.setFromCamera(this.ndc(clientX, clientY), this.camera);
+    const hit = this.raycaster.intersectObject(this.displayMesh, false)[0];
+    return hit ? { face: hit.faceIndex, distance: hit.distance } : null;
   }
 
   // The vertex with the smallest or largest coordinate along an axis (0, 1, 2).
@@ -594,6 +603,7 @@ export class Viewer {
       edgesShown: this.edgesShown,
       upAxis: this.upAxis,
       cameraUp: this.camera.up.toArray(),
+      cameraPosition: this.camera.position.toArray(),
       orbitCenter: this.controls.target.toArray(),
       snapPreview: this.hoverGroup.children[0]?.userData.vertex ?? null,
     };
