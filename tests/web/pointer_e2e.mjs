@@ -94,6 +94,7 @@ await h.run(async () => {
     for (let i = 0; i < 12; ++i) for (let j = 0; j < 10; ++j) points.push([x0 + (w * (i + 0.5)) / 12, y0 + (hgt * (j + 0.5)) / 10]);
     f.pickVertexAt(points[0][0], points[0][1]); // builds the grid (once per mesh)
     const hover = [];
+    const hoverOnMesh = [];
     const three = [];
     let hits = 0;
     const disagreements = [];
@@ -105,6 +106,7 @@ await h.run(async () => {
       const reference = f.threeRaycastAt(x, y);
       three.push(performance.now() - t);
       const mine = f.pickVertexAt(x, y);
+      if (mine) hoverOnMesh.push(hover[hover.length - 1]);
       if (!!mine !== !!reference) disagreements.push({ x, y, mine, reference });
       else if (mine) {
         ++hits;
@@ -115,11 +117,11 @@ await h.run(async () => {
     let t = performance.now();
     f.pickVertexAt(-1e4, -1e4);
     const miss = performance.now() - t;
-    return { hover, three, hits, total: points.length, disagreements, miss };
+    return { hover, hoverOnMesh, three, hits, total: points.length, disagreements, miss };
   }, [view.x, view.y, view.width, view.height]);
   check(figures.hits > 20 && figures.disagreements.length === 0,
     `on igea the page's picking finds three.js's face at three.js's distance at every one of ${figures.total} points (${figures.hits} on the mesh)`,
     () => JSON.stringify(figures.disagreements.slice(0, 3)));
-  console.log(`# igea (268,686 triangles), ${figures.total} pointer positions over the view: hover (pick, snap, read-out, preview) median ${median(figures.hover).toFixed(2)} ms, max ${Math.max(...figures.hover).toFixed(2)} ms; three.js raycast of every triangle median ${median(figures.three).toFixed(2)} ms`);
+  console.log(`# igea (268,686 triangles), ${figures.total} pointer positions over the view: hover (pick, snap, read-out, preview) median ${median(figures.hoverOnMesh).toFixed(2)} ms on the mesh (${figures.hits} points), ${median(figures.hover).toFixed(2)} ms over all, max ${Math.max(...figures.hover).toFixed(2)} ms; a pick that misses ${figures.miss.toFixed(2)} ms; three.js raycast of every triangle median ${median(figures.three).toFixed(2)} ms`);
   check(h.pageErrors.length === 0, 'no uncaught errors in the page', h.pageErrors.join('\n'));
 });
