@@ -561,6 +561,8 @@ await h.run(async () => {
     check(atTop.every((b) => b.shown) && atBottom.every((b) => b.shown) && atTop.length >= 8,
       `at ${name} the primary actions (${atTop.map((b) => b.id).join(', ')}) are visible, also with the panel scrolled`,
       () => JSON.stringify({ atTop, atBottom }));
+    const decomposeShown = (list) => list.find((b) => b.id === 'toolbar-decompose')?.shown === true;
+    check(decomposeShown(atTop) && decomposeShown(atBottom), `at ${name} Decompose is inside the viewport, also with the panel scrolled`);
     check(view.width >= viewport.width - 360 && view.height === viewport.height, `at ${name} the 3D view gets ${Math.round(view.width)}x${Math.round(view.height)} px`);
     await page.evaluate(() => (document.getElementById('panel').scrollTop = 0));
     await page.screenshot({ path: h.artifact(`web-${name}.png`) });
