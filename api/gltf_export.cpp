@@ -152,7 +152,9 @@ std::string write(const tinygltf::Model& model, bool binary) {
 }
 
 // One 8-byte vertex of the compact GLB: x, y, z quantised over the bounding box, and the
-// curvature in the 2 bytes glTF's 4-byte vertex alignment would otherwise leave as padding.
+// curvature in the 2 bytes that glTF's 4-byte alignment of vertex attributes would otherwise
+// leave as padding. An attribute at offset 6 would not be aligned, so `_CURVATURE` is a VEC4
+// over the whole vertex whose w is the curvature (x, y, z are POSITION's bytes again).
 struct CompactVertex {
   std::uint16_t position[3];
   std::uint16_t curvature;
@@ -167,42 +169,48 @@ std::uint16_t quantise(double x, double lo, double extent) {
 
 std::vector<double> as_values(const std::vector<std::uint16_t>& v) { return {v.begin(), v.end()}; }
 
-// The compact vertices and the node transform that maps their integers back to positions.
-int add_compact_vertices(tinygltf::Model& model, tinygltf::Primitive& primitive, tinygltf::Node& node,
-                         const PreparedMesh& pm) {
+// The quantised positions, and the node transform that maps their integers back.
+void quantise_positions(const PreparedMesh& pm, std::vector<CompactVertex>& vertices, tinygltf::Node& node) {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(0), hi = Eigen::Vector3d::Constant(0);
   if (!pm.positions.empty()) lo = hi = pm.positions[0];
   for (const auto& p : pm.positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   const Eigen::Vector3d extent = hi - lo;
-  double c_lo = HUGE_VAL, c_hi = -HUGE_VAL;
-  for (std::size_t v = 0; v < pm.n_vertices(); ++v) {
-    const double c = dominant_curvature(pm.curvature, std::uint32_t(v));
-    c_lo = std::min(c_lo, c), c_hi = std::max(c_hi, c);
-  }
-  if (!(c_lo <= c_hi)) c_lo = c_hi = 0;
-  std::vector<CompactVertex> vertices(pm.n_vertices());
-  std::vector<std::uint16_t> q_min(3, 65535), q_max(3, 0);
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    for (int k = 0; k < 3; ++k) vertices[v].position[k] = quantise(pm.positions[v][k], lo[k], extent[k]);
+  node.translation = {lo[0], lo[1], lo[2]};
+  node.scale.clear();
+  for (int k = 0; k < 3; ++k) node.scale.push_back(extent[k] > 0 ? extent[k] / 65535.0 : 1.0);
+}
+
+// The dominant signed curvature as u / 65535 over its range; returns {offset, scale}.
+std::array<double, 2> quantise_curvature(const PreparedMesh& pm, std::vector<CompactVertex>& vertices) {
+  double lo = HUGE_VAL, hi = -HUGE_VAL;
   for (std::size_t v = 0; v < vertices.size(); ++v) {
-    for (int k = 0; k < 3; ++k) {
-      const std::uint16_t q = quantise(pm.positions[v][k], lo[k], extent[k]);
-      vertices[v].position[k] = q;
-      q_min[k] = std::min(q_min[k], q), q_max[k] = std::max(q_max[k], q);
-    }
-    vertices[v].curvature = quantise(dominant_curvature(pm.curvature, std::uint32_t(v)), c_lo, c_hi - c_lo);
+    const double c = dominant_curvature(pm.curvature, std::uint32_t(v));
+    lo = std::min(lo, c), hi = std::max(hi, c);
   }
+  if (!(lo <= hi)) lo = hi = 0;
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    vertices[v].curvature = quantise(dominant_curvature(pm.curvature, std::uint32_t(v)), lo, hi - lo);
+  return {lo, hi - lo};
+}
+
+void add_compact_vertices(tinygltf::Model& model, tinygltf::Primitive& primitive, tinygltf::Node& node,
+                          const PreparedMesh& pm) {
+  std::vector<CompactVertex> vertices(pm.n_vertices());
+  quantise_positions(pm, vertices, node);
+  const auto [offset, scale] = quantise_curvature(pm, vertices);
+  std::vector<std::uint16_t> q_min(3, 65535), q_max(3, 0);
+  for (const auto& v : vertices)
+    for (int k = 0; k < 3; ++k) q_min[k] = std::min(q_min[k], v.position[k]), q_max[k] = std::max(q_max[k], v.position[k]);
   const int view = add_view(model, vertices.data(), vertices.size() * sizeof(CompactVertex), TINYGLTF_TARGET_ARRAY_BUFFER);
   model.bufferViews[view].byteStride = sizeof(CompactVertex);
   primitive.attributes["POSITION"] = add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC3,
                                                   vertices.size(), false, as_values(q_min), as_values(q_max));
-  const int curvature = add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_SCALAR, vertices.size(), true);
-  model.accessors[curvature].byteOffset = offsetof(CompactVertex, curvature);
-  primitive.attributes["_CURVATURE"] = curvature;
-  primitive.extras = tinygltf::Value(tinygltf::Value::Object{{"curvature_offset", tinygltf::Value(c_lo)},
-                                                             {"curvature_scale", tinygltf::Value(c_hi - c_lo)}});
-  node.translation = {lo[0], lo[1], lo[2]};
-  node.scale.clear();
-  for (int k = 0; k < 3; ++k) node.scale.push_back(extent[k] > 0 ? extent[k] / 65535.0 : 1.0);
-  return view;
+  primitive.attributes["_CURVATURE"] =
+      add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, vertices.size(), true);
+  primitive.extras = tinygltf::Value(tinygltf::Value::Object{{"curvature_offset", tinygltf::Value(offset)},
+                                                             {"curvature_scale", tinygltf::Value(scale)}});
 }
 
 // The triangles' corners in the smallest index type (glTF forbids the type's largest value,

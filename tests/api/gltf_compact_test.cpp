@@ -52,6 +52,7 @@ Decoded decode(const tinygltf::Model& model) {
   EXPECT_EQ(primitive.attributes.count("NORMAL"), 0u) << "the page computes normals";
   const int position = primitive.attributes.at("POSITION"), curvature = primitive.attributes.at("_CURVATURE");
   EXPECT_TRUE(model.accessors[curvature].normalized);
+  EXPECT_EQ(model.accessors[curvature].type, TINYGLTF_TYPE_VEC4);
   const double offset = primitive.extras.Get("curvature_offset").GetNumberAsDouble();
   const double scale = primitive.extras.Get("curvature_scale").GetNumberAsDouble();
   Decoded out;
@@ -59,7 +60,7 @@ Decoded decode(const tinygltf::Model& model) {
     Eigen::Vector3d p;
     for (int k = 0; k < 3; ++k) p[k] = node.translation.at(k) + node.scale.at(k) * read(model, position, v, k);
     out.positions.push_back(p);
-    out.curvature.push_back(offset + scale * read(model, curvature, v) / 65535.0);
+    out.curvature.push_back(offset + scale * read(model, curvature, v, 3) / 65535.0);  // w
   }
   out.index_component = model.accessors[primitive.indices].componentType;
   for (std::size_t i = 0; i < model.accessors[primitive.indices].count; ++i)

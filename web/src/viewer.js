@@ -99,14 +99,15 @@ export function indexedMeshFromGltf(gltf) {
   return { positions, normals, index, vertexCount: n, faceCount: index.length / 3, curvature: quantisedCurvature(source) };
 }
 
-// value = offset + scale * u for the normalised u in [0, 1] (api/gltf_export.h); null when the
-// GLB carries no such field.
+// value = offset + scale * u for the normalised u in [0, 1], the w of the compact GLB's VEC4
+// (api/gltf_export.h); null when the GLB carries no such field.
 function quantisedCurvature(geometry) {
   const attribute = geometry.attributes._curvature;
   const { curvature_offset: offset, curvature_scale: scale } = geometry.userData ?? {};
   if (!attribute || !Number.isFinite(offset) || !Number.isFinite(scale)) return null;
   const out = new Float32Array(attribute.count);
-  for (let v = 0; v < attribute.count; ++v) out[v] = offset + scale * attribute.getX(v);
+  const component = attribute.itemSize - 1; // w of a VEC4, or the scalar
+  for (let v = 0; v < attribute.count; ++v) out[v] = offset + scale * attribute.getComponent(v, component);
   return out;
 }
 
