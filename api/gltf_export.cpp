@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <sstream>
 
@@ -149,6 +151,86 @@ std::string write(const tinygltf::Model& model, bool binary) {
   return out.str();
 }
 
+// One 8-byte vertex of the compact GLB: x, y, z quantised over the bounding box, and the
+// curvature in the 2 bytes that glTF's 4-byte alignment of vertex attributes would otherwise
+// leave as padding. An attribute at offset 6 would not be aligned, so `_CURVATURE` is a VEC4
+// over the whole vertex whose w is the curvature (x, y, z are POSITION's bytes again).
+struct CompactVertex {
+  std::uint16_t position[3];
+  std::uint16_t curvature;
+};
+static_assert(sizeof(CompactVertex) == 8);
+
+// u in [0, 65535] for x in [lo, lo + extent]; 0 on a flat axis (extent 0).
+std::uint16_t quantise(double x, double lo, double extent) {
+  if (!(extent > 0)) return 0;
+  return std::uint16_t(std::clamp(std::lround((x - lo) / extent * 65535.0), 0L, 65535L));
+}
+
+std::vector<double> as_values(const std::vector<std::uint16_t>& v) { return {v.begin(), v.end()}; }
+
+// The quantised positions, and the node transform that maps their integers back.
+void quantise_positions(const PreparedMesh& pm, std::vector<CompactVertex>& vertices, tinygltf::Node& node) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(0), hi = Eigen::Vector3d::Constant(0);
+  if (!pm.positions.empty()) lo = hi = pm.positions[0];
+  for (const auto& p : pm.positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const Eigen::Vector3d extent = hi - lo;
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    for (int k = 0; k < 3; ++k) vertices[v].position[k] = quantise(pm.positions[v][k], lo[k], extent[k]);
+  node.translation = {lo[0], lo[1], lo[2]};
+  node.scale.clear();
+  for (int k = 0; k < 3; ++k) node.scale.push_back(extent[k] > 0 ? extent[k] / 65535.0 : 1.0);
+}
+
+// The dominant signed curvature as u / 65535 over its range; returns {offset, scale}.
+std::array<double, 2> quantise_curvature(const PreparedMesh& pm, std::vector<CompactVertex>& vertices) {
+  double lo = HUGE_VAL, hi = -HUGE_VAL;
+  for (std::size_t v = 0; v < vertices.size(); ++v) {
+    const double c = dominant_curvature(pm.curvature, std::uint32_t(v));
+    lo = std::min(lo, c), hi = std::max(hi, c);
+  }
+  if (!(lo <= hi)) lo = hi = 0;
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    vertices[v].curvature = quantise(dominant_curvature(pm.curvature, std::uint32_t(v)), lo, hi - lo);
+  return {lo, hi - lo};
+}
+
+void add_compact_vertices(tinygltf::Model& model, tinygltf::Primitive& primitive, tinygltf::Node& node,
+                          const PreparedMesh& pm) {
+  std::vector<CompactVertex> vertices(pm.n_vertices());
+  quantise_positions(pm, vertices, node);
+  const auto [offset, scale] = quantise_curvature(pm, vertices);
+  std::vector<std::uint16_t> q_min(3, 65535), q_max(3, 0);
+  for (const auto& v : vertices)
+    for (int k = 0; k < 3; ++k) q_min[k] = std::min(q_min[k], v.position[k]), q_max[k] = std::max(q_max[k], v.position[k]);
+  const int view = add_view(model, vertices.data(), vertices.size() * sizeof(CompactVertex), TINYGLTF_TARGET_ARRAY_BUFFER);
+  model.bufferViews[view].byteStride = sizeof(CompactVertex);
+  primitive.attributes["POSITION"] = add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC3,
+                                                  vertices.size(), false, as_values(q_min), as_values(q_max));
+  primitive.attributes["_CURVATURE"] =
+      add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, vertices.size(), true);
+  primitive.extras = tinygltf::Value(tinygltf::Value::Object{{"curvature_offset", tinygltf::Value(offset)},
+                                                             {"curvature_scale", tinygltf::Value(scale)}});
+}
+
+// The triangles' corners in the smallest index type (glTF forbids the type's largest value,
+// the primitive restart index, so a type holds ids below it).
+void add_compact_indices(tinygltf::Model& model, tinygltf::Primitive& primitive, const PreparedMesh& pm) {
+  const std::size_t n = pm.n_vertices();
+  auto add = [&](auto zero, int component) {
+    using Index = decltype(zero);
+    std::vector<Index> indices;
+    indices.reserve(pm.triangles.size() * 3);
+    for (const auto& t : pm.triangles)
+      for (auto v : t) indices.push_back(Index(v));
+    const int view = add_view(model, indices.data(), indices.size() * sizeof(Index), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    primitive.indices = add_accessor(model, view, component, TINYGLTF_TYPE_SCALAR, indices.size());
+  };
+  if (n < 0xff) add(std::uint8_t{}, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE);
+  else if (n < 0xffff) add(std::uint16_t{}, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+  else add(std::uint32_t{}, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);
+}
+
 // glTF material colours are linear; the palette is sRGB (the sRGB transfer function, IEC 61966-2-1).
 double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); }
 
@@ -231,6 +313,34 @@ std::string labelled_mesh_to_glb(const std::vector<Eigen::Vector3d>& positions,
 
 std::string feature_line_to_glb(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& results, bool include_mesh) {
   return write(build_model(mesh, results, include_mesh), true);
+}
+
+std::string prepared_mesh_to_compact_glb(const PreparedMesh& pm) {
+  if (pm.triangles.empty()) throw InvalidInputError("nothing to write: the mesh has no triangle");
+  tinygltf::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "featureline";
+  model.extensionsUsed = {"KHR_mesh_quantization"};
+  model.extensionsRequired = {"KHR_mesh_quantization"};
+  model.buffers.emplace_back();
+  tinygltf::Primitive primitive;
+  primitive.mode = TINYGLTF_MODE_TRIANGLES;
+  tinygltf::Node node;
+  node.name = "surface";
+  add_compact_vertices(model, primitive, node, pm);
+  add_compact_indices(model, primitive, pm);
+  tinygltf::Mesh mesh;
+  mesh.name = "surface";
+  mesh.primitives.push_back(primitive);
+  model.meshes.push_back(mesh);
+  node.mesh = 0;
+  model.nodes.push_back(node);
+  tinygltf::Scene scene;
+  scene.nodes.push_back(0);
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+  model.buffers[0].data.resize((model.buffers[0].data.size() + 3) / 4 * 4, 0);
+  return write(model, true);
 }
 
 std::string feature_line_to_gltf_json(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& results,

@@ -1,7 +1,7 @@
 #!/usr/bin/env node
 // What the page downloads to show a mesh, and how long until it is on screen: for the bunny
-// (70k triangles) and igea (269k), the bytes of mesh.glb and of the curvature on the wire with
-// and without gzip, and the time from choosing the file to the first frame showing it in
+// (70k triangles) and igea (269k), the bytes of mesh.glb (float, and the compact form the page
+// reads) and of the curvature on the wire with and without gzip, and the time from choosing the file to the first frame showing it in
 // Debian's headless Chromium (software WebGL), median of 3 opens.
 //
 //   node bench/bench_web_transfer.mjs            (from the repository root, after building)
@@ -68,8 +68,10 @@ try {
     const id = description.mesh_id;
     const raw = await fetchBytes(`${base}/v1/meshes/${id}/mesh.glb`, { 'Accept-Encoding': 'identity' });
     const gz = await fetchBytes(`${base}/v1/meshes/${id}/mesh.glb`, { 'Accept-Encoding': 'gzip, deflate, br' });
+    const compactRaw = await fetchBytes(`${base}/v1/meshes/${id}/mesh.glb?compact=1`, { 'Accept-Encoding': 'identity' });
+    const compact = await fetchBytes(`${base}/v1/meshes/${id}/mesh.glb?compact=1`, { 'Accept-Encoding': 'gzip, deflate, br' });
     const curvature = await fetchBytes(`${base}/v1/meshes/${id}/curvature`, { Accept: 'application/octet-stream', 'Accept-Encoding': 'gzip, deflate, br' });
-    rows.push({ name, triangles: description.faces, fileBytes: fs.statSync(file).size, raw, gz, curvature, renders: [] });
+    rows.push({ name, triangles: description.faces, fileBytes: fs.statSync(file).size, raw, gz, compactRaw, compact, curvature, renders: [] });
     await fetch(`${base}/v1/meshes/${id}`, { method: 'DELETE' });
   }
 
@@ -98,6 +100,14 @@ try {
       `${r.name.padEnd(18)} ${String(r.triangles).padStart(9)} ${String(r.fileBytes).padStart(11)} ${String(r.raw.wire).padStart(9)} ${String(r.gz.wire).padStart(11)}` +
         `  ${(r.gz.wire / r.raw.wire).toFixed(3).padStart(8)} ${r.gz.ms.toFixed(0).padStart(8)} ${r.raw.ms.toFixed(0).padStart(7)} ${String(r.curvature.wire).padStart(10)} (${r.curvature.encoding})`,
     );
+  console.log('\nwhat the page downloads: mesh.glb?compact=1 (KHR_mesh_quantization; carries the curvature, so /curvature is not fetched)');
+  console.log('mesh               compact raw  compact gzip  gzip ms  wire / float glb raw');
+  for (const r of rows)
+    console.log(
+      `${r.name.padEnd(18)} ${String(r.compactRaw.wire).padStart(11)} ${String(r.compact.wire).padStart(13)} ${r.compact.ms.toFixed(0).padStart(8)}` +
+        `  ${(r.compact.wire / r.raw.wire).toFixed(3).padStart(20)}`,
+    );
+  console.log(`load average: ${os.loadavg().map((x) => x.toFixed(1)).join(' ')}`);
   console.log(`\ntime to first render in headless Chromium (software WebGL), median of ${RUNS}: choose the file -> first frame with the mesh`);
   console.log('mesh               upload+prepare ms  download+build ms  first render ms');
   for (const r of rows) {

@@ -76,6 +76,16 @@ bool accepts(const httplib::Request& req, const std::string& type) {
   return lower(req.get_header_value("Accept")).find(type) != std::string::npos;
 }
 
+// mesh.glb?compact=1: the quantised download the page reads (KHR_mesh_quantization); the float
+// GLB stays the default for other clients. A query, not Accept: both are model/gltf-binary.
+bool compact_glb_requested(const httplib::Request& req) {
+  if (!req.has_param("compact")) return false;
+  const std::string value = lower(req.get_param_value("compact"));
+  if (value == "1" || value == "true") return true;
+  if (value == "0" || value == "false") return false;
+  throw HttpError(400, "invalid_request", "compact must be 1, true, 0 or false");
+}
+
 void write_error(httplib::Response& res, const ErrorReply& error) {
   res.status = error.status;
   for (const auto& [k, v] : error.headers) res.set_header(k, v);
@@ -377,7 +387,10 @@ struct FeaturelineServer::Impl {
     }));
     http.Get(mesh + "/mesh\\.glb", guarded("/v1/meshes/{id}/mesh.glb", [this](const auto& req, auto& res) {
       auto session = session_or_404(req.matches[1]);
-      std::string glb = run_on_pool([session](const Cancellation*) { return feature_line_to_glb(*session->mesh, {}, true); });
+      const bool compact = compact_glb_requested(req);
+      std::string glb = run_on_pool([session, compact](const Cancellation*) {
+        return compact ? prepared_mesh_to_compact_glb(*session->mesh) : feature_line_to_glb(*session->mesh, {}, true);
+      });
       res.set_header("Cache-Control", "private, max-age=3600");
       // The page's largest download: gzip when accepted (httplib compresses no model/* type).
       set_content_gzip_if_accepted(req, res, std::move(glb), "model/gltf-binary");

@@ -293,6 +293,16 @@ check_eq "GET mesh.glb: 200" "$STATUS" 200
 check_eq "GET mesh.glb: Content-Type" "$(header "$T/mesh.glb" Content-Type)" model/gltf-binary
 check "GET mesh.glb: GLB magic" is_glb "$T/mesh.glb"
 validate_gltf "GET mesh.glb: passes the glTF validator" "$T/mesh.glb"
+# The page's compact form: KHR_mesh_quantization, valid glTF, far smaller; the float GLB stays
+# the default. Its positions are checked against the prepared mesh in tests/api/gltf_compact_test.
+http "$T/compact.glb" "$B/v1/meshes/$F/mesh.glb?compact=1"
+check_eq "GET mesh.glb?compact=1: 200" "$STATUS" 200
+check "GET mesh.glb?compact=1: GLB magic" is_glb "$T/compact.glb"
+validate_gltf "GET mesh.glb?compact=1: passes the glTF validator" "$T/compact.glb"
+check "mesh.glb?compact=1 is under 40% of mesh.glb" \
+  awk -v a="$(wc -c <"$T/compact.glb")" -v b="$(wc -c <"$T/mesh.glb")" 'BEGIN { exit !(a < 0.4 * b) }'
+http "$T/compact_bad.json" "$B/v1/meshes/$F/mesh.glb?compact=yes"
+expect "mesh.glb?compact=yes" 400 invalid_request GET "/v1/meshes/$F/mesh.glb" "$T/compact_bad.json"
 http "$T/reup.json" --data-binary @"$T/mesh.glb" -H 'Content-Type: model/gltf-binary' "$B/v1/meshes"
 expect "mesh.glb uploads again" 201 - POST /v1/meshes "$T/reup.json"
 check_eq "re-uploaded mesh.glb keeps 6475 vertices, 12946 faces" "$(jq -r '"\(.vertices) \(.faces)"' "$T/reup.json")" "6475 12946"

@@ -144,7 +144,8 @@ export function createHarness({ totalTimeoutMs = 180_000, artifactName = 'web.pn
     return h.base;
   };
 
-  h.launch = async (viewport = { width: 1280, height: 800 }) => {
+  // contextOptions: more playwright context options (e.g. {hasTouch: true}).
+  h.launch = async (viewport = { width: 1280, height: 800 }, contextOptions = {}) => {
     const profile = path.join(h.tmp, 'profile');
     fs.mkdirSync(profile, { recursive: true });
     h.context = await h.chromium.launchPersistentContext(profile, {
@@ -152,6 +153,7 @@ export function createHarness({ totalTimeoutMs = 180_000, artifactName = 'web.pn
       headless: true,
       viewport,
       acceptDownloads: true,
+      ...contextOptions,
       args: [
         '--no-sandbox',
         '--disable-gpu',

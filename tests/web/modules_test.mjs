@@ -1,7 +1,8 @@
 #!/usr/bin/env node
 // The page's modules that need no browser, with known answers: 1-based numbering of server
 // text, the undo history, session files, vertex rings, snapping, sharp edges and the CAD and
-// up-axis guesses on real meshes from ../shared/data/meshes.
+// up-axis guesses on real meshes from ../shared/data/meshes, and grid picking against testing
+// every triangle.
 //   node --test tests/web/modules_test.mjs
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
@@ -10,6 +11,7 @@ import test from 'node:test';
 import { fileURLToPath } from 'node:url';
 import { guessUpAxis, looksLikeCad, ringNeighbourhood, sharpEdges, strongestFeatureVertex, vertexAdjacency } from '../../web/src/geometry.js';
 import { History } from '../../web/src/history.js';
+import { buildTriangleGrid, raycastAll, raycastGrid } from '../../web/src/raycast.js';
 import { parseSession, sessionDocument } from '../../web/src/session.js';
 import { oneBasedNumbers } from '../../web/src/text.js';
 
@@ -128,4 +130,54 @@ test('CAD and up axis on real meshes', () => {
   assert.equal(guessUpAxis(extent(readOff(sharedMesh('hemisphere.off')).positions), 'off'), 'z');
   assert.equal(guessUpAxis([1, 1, 1], 'stl'), 'z');
   assert.equal(guessUpAxis([1, 1, 1], 'glb'), 'y');
+});
+
+// A deterministic pseudo-random sequence (so a failure repeats).
+function lcg(seed) {
+  let x = seed >>> 0;
+  return () => ((x = (Math.imul(x, 1664525) + 1013904223) >>> 0) / 2 ** 32);
+}
+
+test('grid picking hits the same triangle at the same distance as testing every triangle (bunny)', () => {
+  const mesh = readOff(sharedMesh('bunny_closed.off'));
+  const grid = buildTriangleGrid(mesh.positions, mesh.index);
+  const random = lcg(12);
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
+  for (let i = 0; i < mesh.positions.length; i += 3)
+    for (let k = 0; k < 3; ++k) (lo[k] = Math.min(lo[k], mesh.positions[i + k])), (hi[k] = Math.max(hi[k], mesh.positions[i + k]));
+  const centre = lo.map((l, k) => (l + hi[k]) / 2);
+  const radius = Math.hypot(...hi.map((h, k) => h - lo[k]));
+  let hits = 0;
+  for (let r = 0; r < 300; ++r) {
+    // From a point on a sphere around the mesh toward a random point inside its box (some
+    // rays miss: toward a box corner), and a few from inside the mesh.
+    const inside = r % 10 === 0;
+    const dir = [random() - 0.5, random() - 0.5, random() - 0.5];
+    const len = Math.hypot(...dir);
+    const o = inside ? centre.slice() : centre.map((c, k) => c + (radius * dir[k]) / len);
+    const target = lo.map((l, k) => l + random() * (hi[k] - l));
+    const d = inside ? dir.map((x) => x / len) : target.map((t, k) => t - o[k]);
+    const a = raycastGrid(grid, o, d);
+    const b = raycastAll(grid, o, d);
+    assert.equal(a === null, b === null, `ray ${r}: hit and miss agree`);
+    if (!a) continue;
+    ++hits;
+    assert.ok(Math.abs(a.t - b.t) <= 1e-9 * Math.max(1, b.t), `ray ${r}: distance ${a.t} vs ${b.t}`);
+    if (a.face !== b.face) assert.ok(Math.abs(a.t - b.t) <= 1e-12, `ray ${r}: face ${a.face} vs ${b.face} at another distance`);
+  }
+  assert.ok(hits > 150, `enough rays hit to mean something (${hits} of 300)`);
+});
+
+test('grid picking on a flat square: the known triangle and point, a miss beside it', () => {
+  // Two triangles over [0,1]^2 at z = 0 (the grid has one cell along z).
+  const positions = new Float32Array([0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0]);
+  const index = new Uint32Array([0, 1, 2, 0, 2, 3]);
+  const grid = buildTriangleGrid(positions, index);
+  const below = raycastGrid(grid, [0.75, 0.25, 5], [0, 0, -1]);
+  assert.equal(below.face, 0);
+  assert.deepEqual(below.point.map((x) => Math.round(x * 1e9) / 1e9), [0.75, 0.25, 0]);
+  assert.equal(raycastGrid(grid, [0.25, 0.75, -2], [0, 0, 1]).face, 1, 'seen from below too (double-sided)');
+  assert.equal(raycastGrid(grid, [1.5, 0.5, 5], [0, 0, -1]), null);
+  assert.equal(raycastGrid(grid, [0.5, 0.5, 5], [0, 0, 1]), null, 'pointing away');
 });

@@ -448,8 +448,13 @@ await h.run(async () => {
   check(s.upAxis === 'y' && st.cameraUp[1] === 1 && top.y < bottom.y - 100,
     `the bunny opens Y-up: its top (max y) is ${Math.round(bottom.y - top.y)} px above its bottom on screen`, () => JSON.stringify({ up: s.upAxis, cam: st.cameraUp, top, bottom }));
   check(!s.cad && !st.flatShading, 'the bunny scan is smooth-shaded');
-  check(s.download?.encoding === 'gzip' && s.download.wireBytes < 0.8 * s.download.received,
-    `the mesh downloads gzip-compressed (${s.download?.wireBytes} bytes on the wire for ${s.download?.received})`, () => JSON.stringify(s.download));
+  // Issue 12's target: the page's mesh download (the compact GLB, gzip) under 35% of the float
+  // mesh.glb's bytes. Quantised positions hardly compress further, so gzip alone saves ~12% now
+  // (the old check, wire < 0.8 x decoded, was for the float GLB).
+  const floatGlbBytes = (await (await fetch(`${h.base}/v1/meshes/${s.meshId}/mesh.glb`)).arrayBuffer()).byteLength;
+  check(s.download?.encoding === 'gzip' && s.download.wireBytes < s.download.received && s.download.wireBytes < 0.35 * floatGlbBytes,
+    `the mesh downloads compact and gzip-compressed (${s.download?.wireBytes} bytes on the wire for ${s.download?.received} decoded, ` +
+      `${((100 * s.download?.wireBytes) / floatGlbBytes).toFixed(1)}% of the float mesh.glb's ${floatGlbBytes})`, () => JSON.stringify(s.download));
   check(s.download?.progressEvents > 1, `the download reported its progress (${s.download?.progressEvents} steps)`);
   await page.mouse.move(5, 5);
   await page.screenshot({ path: h.artifact('web-bunny.png') });
@@ -556,6 +561,8 @@ await h.run(async () => {
     check(atTop.every((b) => b.shown) && atBottom.every((b) => b.shown) && atTop.length >= 8,
       `at ${name} the primary actions (${atTop.map((b) => b.id).join(', ')}) are visible, also with the panel scrolled`,
       () => JSON.stringify({ atTop, atBottom }));
+    const decomposeShown = (list) => list.find((b) => b.id === 'toolbar-decompose')?.shown === true;
+    check(decomposeShown(atTop) && decomposeShown(atBottom), `at ${name} Decompose is inside the viewport, also with the panel scrolled`);
     check(view.width >= viewport.width - 360 && view.height === viewport.height, `at ${name} the 3D view gets ${Math.round(view.width)}x${Math.round(view.height)} px`);
     await page.evaluate(() => (document.getElementById('panel').scrollTop = 0));
     await page.screenshot({ path: h.artifact(`web-${name}.png`) });

@@ -147,11 +147,12 @@ export async function describeMesh(meshId) {
   return (await request(`/v1/meshes/${meshId}`)).json();
 }
 
-// The server's indexed mesh. onProgress({received, total}) counts the bytes as the page gets
+// The server's indexed mesh in its compact form (?compact=1: 16-bit positions and curvature,
+// no normals, small indices; api/openapi.yaml). onProgress({received, total}) counts the bytes as the page gets
 // them (decompressed when the server sends gzip, so `total` is the caller's estimate, or the
 // Content-Length when the answer is not compressed). Resolves to {bytes, wireBytes, encoding}.
 export async function meshGlb(meshId, { onProgress, expectedBytes = 0 } = {}) {
-  const response = await request(`/v1/meshes/${meshId}/mesh.glb`, { headers: { Accept: 'model/gltf-binary' } });
+  const response = await request(`/v1/meshes/${meshId}/mesh.glb?compact=1`, { headers: { Accept: 'model/gltf-binary' } });
   const encoding = response.headers.get('Content-Encoding') || 'identity';
   const length = Number(response.headers.get('Content-Length')) || 0;
   const total = encoding === 'identity' && length ? length : expectedBytes;

@@ -7,6 +7,7 @@ import { GLTFExporter } from 'three/addons/exporters/GLTFExporter.js';
 import { Line2 } from 'three/addons/lines/Line2.js';
 import { LineMaterial } from 'three/addons/lines/LineMaterial.js';
 import { LineGeometry } from 'three/addons/lines/LineGeometry.js';
+import { buildTriangleGrid, raycastGrid } from './raycast.js';
 
 // sRGB hex colours (the CSS legend uses the same ones).
 export const COLORS = {
@@ -66,6 +67,10 @@ export function parseGlb(arrayBuffer) {
 
 // The first triangle mesh of a parsed glTF as flat arrays (transforms applied). The server's
 // mesh.glb is indexed in the session's vertex order, so vertex i here is the server's vertex i.
+// Quantised positions (KHR_mesh_quantization: integers the node's transform maps back) are
+// read as numbers and transformed here: three.js would write a transformed float back into
+// the integer array. Normals are computed (the compact GLB has none); a `_CURVATURE`
+// attribute with `curvature_offset`/`curvature_scale` extras comes back as `curvature`.
 export function indexedMeshFromGltf(gltf) {
   let found = null;
   gltf.scene.updateMatrixWorld(true);
@@ -73,17 +78,37 @@ export function indexedMeshFromGltf(gltf) {
     if (!found && o.isMesh && o.geometry?.attributes?.position) found = o;
   });
   if (!found) throw new Error('the GLB holds no triangle mesh');
-  const g = found.geometry.clone();
-  g.applyMatrix4(found.matrixWorld);
-  const positions = new Float32Array(g.attributes.position.array);
-  const n = g.attributes.position.count;
-  let index;
-  if (g.index) index = Uint32Array.from(g.index.array);
-  else index = Uint32Array.from({ length: n }, (_, i) => i);
-  if (!g.attributes.normal) g.computeVertexNormals();
+  const source = found.geometry;
+  const attribute = source.attributes.position;
+  const n = attribute.count;
+  const positions = new Float32Array(3 * n);
+  const p = new THREE.Vector3();
+  for (let v = 0; v < n; ++v) {
+    p.fromBufferAttribute(attribute, v).applyMatrix4(found.matrixWorld);
+    positions[3 * v] = p.x;
+    positions[3 * v + 1] = p.y;
+    positions[3 * v + 2] = p.z;
+  }
+  const index = source.index ? Uint32Array.from(source.index.array) : Uint32Array.from({ length: n }, (_, i) => i);
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+  g.setIndex(new THREE.BufferAttribute(index, 1));
+  g.computeVertexNormals();
   const normals = new Float32Array(g.attributes.normal.array);
   g.dispose();
-  return { positions, normals, index, vertexCount: n, faceCount: index.length / 3 };
+  return { positions, normals, index, vertexCount: n, faceCount: index.length / 3, curvature: quantisedCurvature(source) };
+}
+
+// value = offset + scale * u for the normalised u in [0, 1], the w of the compact GLB's VEC4
+// (api/gltf_export.h); null when the GLB carries no such field.
+function quantisedCurvature(geometry) {
+  const attribute = geometry.attributes._curvature;
+  const { curvature_offset: offset, curvature_scale: scale } = geometry.userData ?? {};
+  if (!attribute || !Number.isFinite(offset) || !Number.isFinite(scale)) return null;
+  const out = new Float32Array(attribute.count);
+  const component = attribute.itemSize - 1; // w of a VEC4, or the scalar
+  for (let v = 0; v < attribute.count; ++v) out[v] = offset + scale * attribute.getComponent(v, component);
+  return out;
 }
 
 export class Viewer {
@@ -376,10 +401,16 @@ export class Viewer {
   pickVertex(clientX, clientY) {
     if (!this.displayMesh) return null;
     this.raycaster.setFromCamera(this.ndc(clientX, clientY), this.camera);
-    const hits = this.raycaster.intersectObject(this.displayMesh, false);
-    if (hits.length === 0) return null;
-    const hit = hits[0];
-    const f = hit.faceIndex;
+    // The grid is built on the first pick, not before the first frame (igea: about 0.2 s).
+    if (!this.triangleGrid || this.triangleGrid.positions !== this.mesh.positions)
+      this.triangleGrid = buildTriangleGrid(this.mesh.positions, this.mesh.index);
+    // The mesh is drawn untransformed (the up axis turns the camera), so the world ray is the
+    // mesh's own.
+    const { origin, direction } = this.raycaster.ray;
+    const hit = raycastGrid(this.triangleGrid, origin.toArray(), direction.toArray());
+    if (!hit) return null;
+    hit.point = new THREE.Vector3(...hit.point);
+    const f = hit.face;
     const { index, positions } = this.mesh;
     let best = -1;
     let bestD = Infinity;
@@ -391,7 +422,16 @@ export class Viewer {
       const d = dx * dx + dy * dy + dz * dz;
       if (d < bestD) (bestD = d), (best = v);
     }
-    return { vertex: best, face: f, point: hit.point.toArray() };
+    return { vertex: best, face: f, point: hit.point.toArray(), distance: hit.t };
+  }
+
+  // three.js's raycast of the drawn mesh (tests every triangle): {face, distance} or null. The
+  // reference that pickVertex's grid must agree with.
+  pickFaceWithThree(clientX, clientY) {
+    if (!this.displayMesh) return null;
+    this.raycaster.setFromCamera(this.ndc(clientX, clientY), this.camera);
+    const hit = this.raycaster.intersectObject(this.displayMesh, false)[0];
+    return hit ? { face: hit.faceIndex, distance: hit.distance } : null;
   }
 
   // The vertex with the smallest or largest coordinate along an axis (0, 1, 2).
@@ -564,6 +604,7 @@ export class Viewer {
       edgesShown: this.edgesShown,
       upAxis: this.upAxis,
       cameraUp: this.camera.up.toArray(),
+      cameraPosition: this.camera.position.toArray(),
       orbitCenter: this.controls.target.toArray(),
       snapPreview: this.hoverGroup.children[0]?.userData.vertex ?? null,
     };

@@ -1,0 +1,92 @@
+// The options form: limits and tooltips from the server's option tables, edits as history steps.
+import * as api from './api.js';
+import { $, state } from './app.js';
+import { edit } from './lines.js';
+import { refresh } from './panel.js';
+
+// ---- options -----------------------------------------------------------------------------------------
+export function readOptions() {
+  const options = {};
+  const problems = [];
+  for (const el of $('options-form').elements) {
+    if (!el.name || el.value === '') continue;
+    let value = el.value;
+    if (el.type === 'number') {
+      value = Number(el.value);
+      const min = el.min === '' ? -Infinity : Number(el.min);
+      const max = el.max === '' ? Infinity : Number(el.max);
+      const integer = el.step === '1';
+      if (!Number.isFinite(value) || value < min || value > max || (integer && !Number.isInteger(value))) {
+        problems.push(`${el.labels?.[0]?.textContent ?? el.name} must be ${integer ? 'an integer' : 'a number'} from ${min} to ${max}`);
+        continue;
+      }
+    } else if (el.name === 'refine') {
+      value = value === 'true';
+    }
+    const path = el.name.split('.');
+    let o = options;
+    for (const p of path.slice(0, -1)) o = o[p] ??= {};
+    o[path[path.length - 1]] = value;
+  }
+  return { options, problems };
+}
+
+// The inputs' limits, steps, choices and tooltips come from the server's option tables
+// (GET /v1/options), so the page never accepts what the server refuses or refuses what it
+// accepts. Until they arrive the server's own checks answer.
+export function applyOptionTables(tables) {
+  const rows = new Map(tables.feature_line.map((row) => [row.name, row]));
+  for (const el of $('options-form').elements) {
+    const row = rows.get(el.name);
+    if (!row) continue;
+    const shown = typeof row.default === 'number' ? String(row.default) : JSON.stringify(row.default);
+    el.title = `${row.description} (default ${shown.replaceAll('"', '')})`;
+    if (el.type === 'number') {
+      el.min = String(row.minimum);
+      el.max = String(row.maximum);
+      el.step = row.type === 'integer' ? '1' : 'any';
+      el.title = `${row.description} (${row.minimum} to ${row.maximum}; default ${shown})`;
+    } else if (el.tagName === 'SELECT' && row.enum) {
+      const chosen = el.value;
+      while (el.options.length > 1) el.remove(1);  // the first option is "default"
+      for (const name of row.enum) el.add(new Option(name, name));
+      el.value = row.enum.includes(chosen) ? chosen : '';
+    }
+  }
+}
+
+export async function loadOptionTables() {
+  try {
+    applyOptionTables(await api.optionTables());
+  } catch (e) {
+    console.warn('option tables unavailable; the server checks the options', e);
+  }
+}
+
+// The form shows `options` (undo, redo, a loaded session).
+export function writeOptionsForm(options) {
+  for (const el of $('options-form').elements) {
+    if (!el.name) continue;
+    let v = options;
+    for (const p of el.name.split('.')) v = v?.[p];
+    el.value = v === undefined || v === null ? '' : String(v);
+  }
+  $('options-error').hidden = true;
+  state.optionsValid = true;
+}
+
+export let optionsTimer = 0;
+export function optionsChanged() {
+  clearTimeout(optionsTimer);
+  optionsTimer = setTimeout(() => {
+    const { options, problems } = readOptions();
+    $('options-error').hidden = problems.length === 0;
+    $('options-error').textContent = problems.join('\n');
+    state.optionsValid = problems.length === 0;
+    if (!state.optionsValid) return refresh();
+    if (JSON.stringify(options) === JSON.stringify(state.options)) return;
+    edit('change options', () => {
+      state.options = options;
+    });
+  }, 250);
+}
