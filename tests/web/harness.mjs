@@ -167,6 +167,11 @@ export function createHarness({ totalTimeoutMs = 180_000, artifactName = 'web.pn
         '--enable-unsafe-swiftshader',
       ],
     });
+    // The page loads three.js's modules (about 0.5 MB) from the server under test; with every
+    // core busy (ctest -j beside other builds) that took up to 22 s, over playwright's default
+    // 30 s navigation limit once the page's own requests were added. A slow machine is not a
+    // failure of the page: navigations get 120 s (each test's total limit still holds).
+    h.context.setDefaultNavigationTimeout(120_000);
     h.page = h.context.pages()[0] || (await h.context.newPage());
     h.watch(h.page);
     return h.page;

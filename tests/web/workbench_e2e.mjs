@@ -455,7 +455,10 @@ await h.run(async () => {
   check(s.download?.encoding === 'gzip' && s.download.wireBytes < s.download.received && s.download.wireBytes < 0.35 * floatGlbBytes,
     `the mesh downloads compact and gzip-compressed (${s.download?.wireBytes} bytes on the wire for ${s.download?.received} decoded, ` +
       `${((100 * s.download?.wireBytes) / floatGlbBytes).toFixed(1)}% of the float mesh.glb's ${floatGlbBytes})`, () => JSON.stringify(s.download));
-  check(s.download?.progressEvents > 1, `the download reported its progress (${s.download?.progressEvents} steps)`);
+  // How many chunks the body arrives in depends on the machine; what must hold is that the
+  // progress shown followed the stream to its last byte.
+  check(s.download?.progressEvents >= 1 && s.download.progressBytes === s.download.received,
+    `the download reported its progress up to its last byte (${s.download?.progressEvents} steps, ${s.download?.progressBytes} of ${s.download?.received} bytes)`);
   await page.mouse.move(5, 5);
   await page.screenshot({ path: h.artifact('web-bunny.png') });
   await page.check('input[name="up-axis"][value="z"]');

@@ -91,17 +91,18 @@ export function expectedGlbBytes(d) {
 export async function showServerMesh(description, name, { keepLines = false } = {}) {
   const id = description.mesh_id;
   setProgress(true, 0, 'downloading the prepared mesh…');
-  let progressEvents = 0;
+  let progressEvents = 0, progressBytes = 0;
   const glb = await api.withRetry(() =>
     api.meshGlb(id, {
       expectedBytes: expectedGlbBytes(description),
       onProgress: ({ received, total }) => {
         progressEvents++;
+        progressBytes = received;
         setProgress(true, total ? Math.min(0.99, received / total) : null, `downloading the prepared mesh: ${formatBytes(received)}${total ? ` of about ${formatBytes(total)}` : ''}`);
       },
     }),
   );
-  state.download = { received: glb.bytes.byteLength, wireBytes: glb.wireBytes, encoding: glb.encoding, progressEvents };
+  state.download = { received: glb.bytes.byteLength, wireBytes: glb.wireBytes, encoding: glb.encoding, progressEvents, progressBytes };
   const mesh = indexedMeshFromGltf(await parseGlb(glb.bytes));
   // The compact GLB carries the curvature (16-bit over its range); /curvature only without it.
   const curvature = mesh.curvature ?? (await api.withRetry(() => api.curvature(id)));
