@@ -218,7 +218,18 @@ SnakeOptions line_snake_options(const PreparedMesh& pm, const FeatureLineRequest
   return snake;
 }
 
+void check_min_piece_edges(const FeatureLineOptions& options) {
+  if (!FeatureLineOptions::min_piece_edges_range.contains(options.min_piece_edges))
+    throw InvalidInputError("min_piece_edges must be at least " + format_number(FeatureLineOptions::min_piece_edges_range.min));
+}
+
 }  // namespace
+
+void check_feature_line_options(const FeatureLineOptions& options) {
+  check_min_piece_edges(options);
+  check_strip_options(options.strip);
+  check_snake_options(options.snake);
+}
 
 double mean_feature_strength(const PreparedMesh& pm, const std::vector<SurfacePoint>& points, double feature_sign,
                              double cap) {
@@ -249,7 +260,7 @@ double polyline_length(const std::vector<SurfacePoint>& points, bool closed) {
 FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineRequest& request) {
   const auto start = Clock::now();
   const FeatureLineOptions& options = request.options;
-  if (options.min_piece_edges < 2) throw InvalidInputError("min_piece_edges must be at least 2");
+  check_min_piece_edges(options);
   FeatureLineResult result;
   result.keys = request.keys;
   result.closed = request.closed;

@@ -181,12 +181,6 @@ Eigen::SparseMatrix<double> stiffness(std::size_t n, double alpha, double beta) 
   return A;
 }
 
-void check_snake_options(const SnakeOptions& o) {
-  if (!(o.alpha >= 0) || !(o.beta >= 0) || !(o.tau > 0) || !(o.kappa >= 0) || !(o.exponent > 0) || !(o.spacing > 0.01) ||
-      o.max_iterations < 0 || o.resample_every < 1 || !(o.max_step > 0) || !(o.curvature_cap > 0))
-    throw InvalidInputError("snake options out of range (alpha, beta, kappa >= 0; tau, exponent, max_step > 0; spacing > 0.01)");
-}
-
 // ---------------------------------------------------------------------------------------------
 // The stages of refine_with_snake. Distances are in strip edge lengths ("unit") inside the
 // linear system and the force, in strip coordinates where points are placed.
@@ -479,6 +473,17 @@ void iterate_snake(const SnakeRun& run, SnakeResult& result, const Cancellation*
 }
 
 }  // namespace
+
+void check_snake_options(const SnakeOptions& o) {
+  using S = SnakeOptions;
+  if (!S::alpha_range.contains(o.alpha) || !S::beta_range.contains(o.beta) || !S::tau_range.contains(o.tau) ||
+      !S::kappa_range.contains(o.kappa) || !S::exponent_range.contains(o.exponent) ||
+      !S::spacing_range.contains(o.spacing) || !S::max_iterations_range.contains(o.max_iterations) ||
+      !S::resample_every_range.contains(o.resample_every) || !S::max_step_range.contains(o.max_step) ||
+      !S::curvature_cap_range.contains(o.curvature_cap))
+    throw InvalidInputError("snake options out of range (alpha, beta, kappa >= 0; tau, exponent, max_step > 0; spacing > " +
+                            format_number(S::spacing_range.min) + ")");
+}
 
 StripPoint locate_by_walking(const FeatureStrip& strip, const FlatStrip& flat, std::uint32_t start,
                              const Eigen::Vector2d& target) {
