@@ -52,9 +52,9 @@ SegmentationResult segment_mesh(const PreparedMesh& mesh, const std::vector<Feat
   VertexFaces remeshed_vertex_faces;
   std::vector<Triangle> remeshed_neighbors;
   if (options.mode == SegmentationMode::snap) {
-    cut.cuts = cut_along_nearest_vertices(mesh, lines, options, report);
+    cut.cuts = cut_along_nearest_vertices(mesh, lines, options, report, cancel);
   } else {
-    RemeshedCut remeshed = cut_along_lines_by_remeshing(mesh, lines, options, report);
+    RemeshedCut remeshed = cut_along_lines_by_remeshing(mesh, lines, options, report, cancel);
     result.positions = std::move(remeshed.positions);
     result.triangles = std::move(remeshed.triangles);
     result.source_faces = std::move(remeshed.source_faces);
