@@ -1,19 +1,13 @@
 #include "api/options_table.h"
 
 #include <cmath>
-#include <sstream>
+#include <stdexcept>
 
 #include "engine/errors.h"
 
 namespace featureline {
 
 using nlohmann::json;
-
-std::string format_number(double x) {
-  std::ostringstream s;
-  s << x;
-  return s.str();
-}
 
 namespace {
 
@@ -86,6 +80,16 @@ json check_option_value(const OptionSpec& spec, const json& value, const std::st
   return json(x);
 }
 
+OptionRange within(const ValidRange& engine, double minimum, double maximum) {
+  const bool own_min = !std::isnan(minimum), own_max = !std::isnan(maximum);
+  if ((!own_min && (engine.min_open || !std::isfinite(engine.min))) || (!own_max && (engine.max_open || !std::isfinite(engine.max))))
+    throw std::logic_error("an option row takes an open or unbounded end of the engine's range " + describe(engine));
+  OptionRange range{own_min ? minimum : engine.min, own_max ? maximum : engine.max, engine};
+  if (!engine.contains(range.minimum) || !engine.contains(range.maximum))
+    throw std::logic_error("an option row's limits leave the engine's range " + describe(engine));
+  return range;
+}
+
 json describe_options(const std::vector<OptionSpec>& specs) {
   json rows = json::array();
   for (const auto& spec : specs) {
@@ -106,10 +110,20 @@ json describe_options(const std::vector<OptionSpec>& specs) {
 }
 
 // ---- the tables ----------------------------------------------------------------------------------
-// Maxima of the options that set how much work a line does (iterations, spacing, rings, the
-// shortest piece) are caps: at all of them together one line of a few hundred edges on a
-// 270k-triangle mesh stays near a second (bench/bench_worst_case prints it). The other limits
-// only keep values meaningful.
+// Options the engine checks take their limits from the engine's ranges (within(): kEngineEnd is
+// the engine's own end). Where the engine accepts more than a request may ask, the table's
+// number is either a cost cap (named below) or a bound that only keeps values meaningful.
+
+namespace {
+// Caps on cost, tighter than the engine's ranges: at all of them together one line of a few
+// hundred edges on a 270k-triangle mesh stays near a second (bench/bench_worst_case prints it).
+// The strip's rings are capped by the engine itself (StripOptions::max_rings).
+constexpr double kSnakeIterationsCap = 500;  // engine: any count >= 0
+constexpr double kSnakeSpacingCap = 0.25;    // smallest spacing, edge lengths; engine: > 0.01
+constexpr double kSnakeKappaCap = 1;         // engine: any weight >= 0
+constexpr double kSnakeExponentCap = 4;      // engine: any p > 0
+constexpr double kSnakeMaxStepCap = 1;       // edge lengths; engine: any step > 0
+}  // namespace
 
 const OptionTable<FeatureLineOptions>& feature_line_option_table() {
   using O = FeatureLineOptions;
@@ -136,7 +150,7 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 &I::sign_aware),
       option<O>("max_line_edges", {1, 1000}, "Lines longer than this many edges are refused (split them): every "
                 "stage's work grows with the length", "", &O::initial, &I::max_edges),
-      option<O>("rings", {0, 8}, "Rings of faces around the initial line in the feature strip (0: from the line's "
+      option<O>("rings", within(StripOptions::rings_range), "Rings of faces around the initial line in the feature strip (0: from the line's "
                 "length, 2 to 8)", "--rings", &O::strip, &StripOptions::rings),
       option<O>("dense_line_edges", {1, 1000}, "Automatic rings: lines of this many edges get 3 rings, twice as many 4, "
                 "four times 6, eight times 8", "", &O::strip, &StripOptions::dense_line_edges),
@@ -146,7 +160,7 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "fraction are left out of the snake's domain", "", &O::strip, &StripOptions::max_edge_distortion),
       option<O>("refine", {}, "Refine the initial line with the snake", "--no-refine", &O::refine),
       option<O>("pin_interior_keys", {}, "Interior keys stay where they are placed", "--free-keys", &O::pin_interior_keys),
-      option<O>("min_piece_edges", {2, 1000}, "A strip that folds over is split in two until pieces are this short "
+      option<O>("min_piece_edges", within(O::min_piece_edges_range, kEngineEnd, 1000), "A strip that folds over is split in two until pieces are this short "
                 "(line edges)", "", &O::min_piece_edges),
       option<O>("exact_crease_edges", {0, 1000}, "A piece running along at least this many crease edges only is kept "
                 "exactly on clean meshes (0: refine creases too)", "", &O::exact_crease_edges),
@@ -162,21 +176,21 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "edges is fitted as a crease run", "", &O::crease_fit, &CreaseFitOptions::min_crease_share),
       option<O>("keep_initial_below", {0, 1}, "A refined piece weaker on the feature than this share of its initial "
                 "line keeps the initial line (0: always the snake's)", "", &O::keep_initial_below),
-      option<O>("snake.alpha", {0, 1000}, "Elasticity: resistance to stretching (Eq. 12)", "--alpha", &O::snake, &S::alpha),
-      option<O>("snake.beta", {0, 1000}, "Rigidity: resistance to bending (Eq. 12)", "--beta", &O::snake, &S::beta),
-      option<O>("snake.tau", {1e-4, 1000}, "Time step of the semi-implicit iteration (Eq. 15)", "--tau", &O::snake, &S::tau),
-      option<O>("snake.kappa", {0, 1}, "Weight of the feature force", "--kappa", &O::snake, &S::kappa),
-      option<O>("snake.exponent", {0.1, 4}, "p in the feature potential |C|^p (the paper: 2)", "", &O::snake, &S::exponent),
-      option<O>("snake.curvature_cap", {0.01, 1000}, "|C| is clamped at this many curvature-scale units", "", &O::snake,
+      option<O>("snake.alpha", within(S::alpha_range, kEngineEnd, 1000), "Elasticity: resistance to stretching (Eq. 12)", "--alpha", &O::snake, &S::alpha),
+      option<O>("snake.beta", within(S::beta_range, kEngineEnd, 1000), "Rigidity: resistance to bending (Eq. 12)", "--beta", &O::snake, &S::beta),
+      option<O>("snake.tau", within(S::tau_range, 1e-4, 1000), "Time step of the semi-implicit iteration (Eq. 15)", "--tau", &O::snake, &S::tau),
+      option<O>("snake.kappa", within(S::kappa_range, kEngineEnd, kSnakeKappaCap), "Weight of the feature force", "--kappa", &O::snake, &S::kappa),
+      option<O>("snake.exponent", within(S::exponent_range, 0.1, kSnakeExponentCap), "p in the feature potential |C|^p (the paper: 2)", "", &O::snake, &S::exponent),
+      option<O>("snake.curvature_cap", within(S::curvature_cap_range, 0.01, 1000), "|C| is clamped at this many curvature-scale units", "", &O::snake,
                 &S::curvature_cap),
-      option<O>("snake.max_step", {1e-3, 1}, "Largest move of a point in one iteration (edge lengths)", "", &O::snake,
+      option<O>("snake.max_step", within(S::max_step_range, 1e-3, kSnakeMaxStepCap), "Largest move of a point in one iteration (edge lengths)", "", &O::snake,
                 &S::max_step),
-      option<O>("snake.iterations", {0, 500}, "Iteration cap per piece", "--iterations", &O::snake, &S::max_iterations),
+      option<O>("snake.iterations", within(S::max_iterations_range, kEngineEnd, kSnakeIterationsCap), "Iteration cap per piece", "--iterations", &O::snake, &S::max_iterations),
       option<O>("snake.tolerance", {0, 10}, "Stop when the line's shape changes less than this per iteration (edge "
                 "lengths)", "", &O::snake, &S::tolerance),
-      option<O>("snake.spacing", {0.25, 10}, "Distance between snake points (edge lengths)", "--spacing", &O::snake,
+      option<O>("snake.spacing", within(S::spacing_range, kSnakeSpacingCap, 10), "Distance between snake points (edge lengths)", "--spacing", &O::snake,
                 &S::spacing),
-      option<O>("snake.resample_every", {1, 1000}, "Iterations between resampling passes", "", &O::snake,
+      option<O>("snake.resample_every", within(S::resample_every_range, kEngineEnd, 1000), "Iterations between resampling passes", "", &O::snake,
                 &S::resample_every),
       option<O>("snake.force", {}, "Feature force: the paper's per-triangle gradient, or smooth vertex gradients",
                 "--force", &O::snake, &S::force),
@@ -197,13 +211,13 @@ const OptionTable<SegmentationOptions>& segmentation_option_table() {
   static const OptionTable<O> table = {
       option<O>("mode", {}, "snap: cut along mesh edges nearest the lines; remesh: split faces so parts meet on the "
                 "smooth line", "--mode", &O::mode),
-      option<O>("min_segment_area_fraction", {0, 0.5}, "Parts below this share of the area are reported (or merged)",
+      option<O>("min_segment_area_fraction", within(O::min_segment_area_fraction_range, kEngineEnd, 0.5), "Parts below this share of the area are reported (or merged)",
                 "--min-segment-area", &O::min_segment_area_fraction),
       option<O>("merge_tiny_segments", {}, "Merge parts below min_segment_area_fraction into the neighbour sharing "
                 "most of their cut", "--merge-tiny-segments", &O::merge_tiny_segments),
-      option<O>("attach_distance", {0, 20}, "A loose line end this close (edge lengths) to the boundary or another "
+      option<O>("attach_distance", within(O::attach_distance_range, kEngineEnd, 20), "A loose line end this close (edge lengths) to the boundary or another "
                 "line is joined to it (0: off)", "--attach-distance", &O::attach_distance),
-      option<O>("remesh_snap", {0, 0.2}, "remesh: crossings this close (fraction of an edge) to a vertex or edge "
+      option<O>("remesh_snap", within(O::remesh_snap_range, kEngineEnd, 0.2), "remesh: crossings this close (fraction of an edge) to a vertex or edge "
                 "move onto it", "--remesh-snap", &O::remesh_snap),
   };
   return table;
@@ -214,13 +228,13 @@ const OptionTable<CurvatureOptions>& curvature_option_table() {
   static const OptionTable<O> table = {
       option<O>("method", {}, "jet: principal curvatures of a fit over a radius that follows the noise; cotangent: "
                 "the paper's one-ring mean curvature", "--curvature", &O::method),
-      option<O>("radius", {0, CurvatureLimits::max_radius}, "Jet radius in local edge lengths (0: from the noise)",
+      option<O>("radius", within(CurvatureLimits::radius_range), "Jet radius in local edge lengths (0: from the noise)",
                 "--curvature-radius", &O::radius),
-      option<O>("smoothing_passes", {-1, CurvatureLimits::max_smoothing_passes}, "Laplacian passes over the "
+      option<O>("smoothing_passes", within(CurvatureLimits::smoothing_passes_range), "Laplacian passes over the "
                 "curvature field (-1: while they cut its roughness)", "--smooth-curvature", &O::smoothing_passes),
-      option<O>("crease_angle", {-1, CurvatureLimits::max_crease_angle}, "Dihedral angle in degrees above which an "
+      option<O>("crease_angle", within(CurvatureLimits::crease_angle_range, -1), "Dihedral angle in degrees above which an "
                 "edge is a crease (0: from the noise, -1: no creases)", "--crease-angle", &O::crease_angle),
-      option<O>("smoothing_tolerance", {0.01, 0.99}, "Automatic smoothing goes on while a run of passes leaves at "
+      option<O>("smoothing_tolerance", within(CurvatureLimits::smoothing_tolerance_range, 0.01, 0.99), "Automatic smoothing goes on while a run of passes leaves at "
                 "most this share of the field's roughness", "", &O::smoothing_tolerance),
   };
   return table;

@@ -7,7 +7,9 @@
 // line at the caps).
 #pragma once
 
+#include <cmath>
 #include <functional>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -34,6 +36,9 @@ struct OptionSpec {
   std::string name;  ///< JSON path below the options object, parts joined by '.' ("snake.iterations")
   OptionKind kind = OptionKind::number;
   double minimum = 0, maximum = 0;   ///< number and integer
+  /// What the engine itself accepts, for options it checks (engine/valid_range.h): the row's
+  /// limits lie inside it, equal to its closed finite ends.
+  std::optional<ValidRange> engine_range;
   std::vector<std::string> choices;  ///< choice: the accepted names
   std::vector<std::string> aliases;  ///< choice: older names still accepted, never printed
   nlohmann::json default_value;      ///< the struct's default, as JSON
@@ -69,9 +74,6 @@ struct RequestLimits {
 /// `value` checked against `spec` (type, range, accepted names), normalised (2.0 -> 2 for
 /// integers). \throw InvalidInputError "\"<where>\" must be an integer from 1 to 2000" and the like.
 nlohmann::json check_option_value(const OptionSpec& spec, const nlohmann::json& value, const std::string& where);
-
-/// A limit or default as errors and help print it: 0.0001, 500, 1e+06.
-std::string format_number(double x);
 
 /// "prefix.name", or "name" when the prefix is empty.
 std::string option_path(const std::string& prefix, const std::string& name);
@@ -152,8 +154,21 @@ std::vector<std::string> enum_choices(bool primary = true) {
 }
 
 struct OptionRange {
+  OptionRange() = default;
+  OptionRange(double min, double max, std::optional<ValidRange> engine_range = std::nullopt)
+      : minimum(min), maximum(max), engine(engine_range) {}
   double minimum = 0, maximum = 0;  ///< unused for booleans and choices
+  std::optional<ValidRange> engine;  ///< the engine's own range, when it checks the option
 };
+
+/// In within(): this end of the row is the engine's own (a closed, finite end of its range).
+constexpr double kEngineEnd = NAN;
+
+/// A row's limits for an option the engine checks: each end is the engine's (kEngineEnd) or the
+/// table's own number inside the engine's range (where the engine's end is open or unbounded,
+/// or where the table caps cost). \throw std::logic_error when kEngineEnd meets an open or
+/// unbounded end, or a number lies outside the engine's range.
+OptionRange within(const ValidRange& engine, double minimum = kEngineEnd, double maximum = kEngineEnd);
 
 /// A row for the member reached from Options through `path` (one member pointer per level).
 template <typename Options, typename... Path>
@@ -164,6 +179,7 @@ OptionField<Options> option(const char* name, OptionRange range, const char* des
   field.spec.kind = option_kind<Value>();
   field.spec.minimum = range.minimum;
   field.spec.maximum = range.maximum;
+  field.spec.engine_range = range.engine;
   if constexpr (std::is_enum_v<Value>) {
     field.spec.choices = enum_choices<Value>();
     field.spec.aliases = enum_choices<Value>(false);

@@ -47,6 +47,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -413,112 +414,151 @@ std::vector<int> parse_sizes(const std::string& text) {
   return sizes;
 }
 
-int main(int argc, char** argv) {
+namespace {
+
+struct BenchArgs {
   int seeds = 3, worst_count = 12;
   bool quick = false, no_cad = false, cad_only = false, trace = false;
   std::vector<int> only_sizes;
-  std::string only;
+  std::string only;  ///< --variant: run this variant only
+};
+
+// The command line; std::nullopt (after printing the usage) when it is not understood.
+std::optional<BenchArgs> parse_args(int argc, char** argv) {
+  BenchArgs a;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--seeds" && i + 1 < argc) seeds = std::max(1, std::atoi(argv[++i]));
-    else if (arg == "--quick") quick = true;
-    else if (arg == "--sizes" && i + 1 < argc) only_sizes = parse_sizes(argv[++i]);
-    else if (arg == "--no-cad") no_cad = true;
-    else if (arg == "--cad-only") cad_only = true;
-    else if (arg == "--trace") trace = true;
-    else if (arg == "--variant" && i + 1 < argc) only = argv[++i];
-    else if (arg == "--worst" && i + 1 < argc) worst_count = std::max(0, std::atoi(argv[++i]));
+    if (arg == "--seeds" && i + 1 < argc) a.seeds = std::max(1, std::atoi(argv[++i]));
+    else if (arg == "--quick") a.quick = true;
+    else if (arg == "--sizes" && i + 1 < argc) a.only_sizes = parse_sizes(argv[++i]);
+    else if (arg == "--no-cad") a.no_cad = true;
+    else if (arg == "--cad-only") a.cad_only = true;
+    else if (arg == "--trace") a.trace = true;
+    else if (arg == "--variant" && i + 1 < argc) a.only = argv[++i];
+    else if (arg == "--worst" && i + 1 < argc) a.worst_count = std::max(0, std::atoi(argv[++i]));
     else {
       std::fprintf(stderr, "usage: bench_accuracy [--seeds N] [--quick] [--variant NAME] [--worst K] [--sizes 51,351] [--no-cad | --cad-only] [--trace]\n"
                            "  --quick    n=51 and 111 fields, one seed, fandisk only\n");
-      return 2;
+      return std::nullopt;
     }
   }
+  if (a.quick) a.seeds = 1;
+  return a;
+}
+
+// The variants to run (all, or the one named); empty (after listing them) for an unknown name.
+std::vector<Variant> selected_variants(const std::string& only) {
   std::vector<Variant> variants;
   for (auto& v : all_variants())
     if (only.empty() || v.name == only) variants.push_back(std::move(v));
   if (variants.empty()) {
     std::fprintf(stderr, "unknown variant '%s'; variants:\n", only.c_str());
     for (const auto& v : all_variants()) std::fprintf(stderr, "  %s\n", v.name.c_str());
-    return 2;
   }
-  if (quick) seeds = 1;
+  return variants;
+}
 
-  std::vector<Case> cases;
-  // About 5k, 24k, 80k and 245k triangles; the whole default run stays well under 3 minutes.
-  const std::vector<int> sizes = !only_sizes.empty() ? only_sizes
-                                 : quick             ? std::vector<int>{51, 111}
-                                                     : std::vector<int>{51, 111, 201, 351};
+// About 5k, 24k, 80k and 245k triangles; the whole default run stays well under 3 minutes.
+std::vector<int> field_sizes(const BenchArgs& a) {
+  return !a.only_sizes.empty() ? a.only_sizes : a.quick ? std::vector<int>{51, 111} : std::vector<int>{51, 111, 201, 351};
+}
+
+// Ridge and valley fields, slabs, real CAD meshes; false (after saying which) when a mesh is missing.
+bool build_cases(const BenchArgs& a, const std::vector<int>& sizes, std::vector<Case>& cases) {
   for (bool ridge : {true, false})
     for (int n : sizes)
-      if (!cad_only) cases.push_back(ridge_case(ridge, n, {0, 10, 20, 30}));
+      if (!a.cad_only) cases.push_back(ridge_case(ridge, n, {0, 10, 20, 30}));
   for (auto t : {SlabTessellation::skinny, SlabTessellation::fine})
     for (bool loop : {false, true})
-      if (!no_cad) cases.push_back(slab_case(t, loop));
+      if (!a.no_cad) cases.push_back(slab_case(t, loop));
   const std::vector<std::string> cad_files =
-      no_cad  ? std::vector<std::string>{}
-      : quick ? std::vector<std::string>{"fandisk.off"}
-            : std::vector<std::string>{"fandisk.off", "fandisk_aimatshape.off", "rocker-arm.obj", "wingnut.obj"};
+      a.no_cad  ? std::vector<std::string>{}
+      : a.quick ? std::vector<std::string>{"fandisk.off"}
+                : std::vector<std::string>{"fandisk.off", "fandisk_aimatshape.off", "rocker-arm.obj", "wingnut.obj"};
   for (const auto& file : cad_files) {
     const std::string path = shared_mesh(file);
     if (!std::ifstream(path)) {
       std::fprintf(stderr, "missing test mesh %s (expected beside the repository in ../shared/data/meshes)\n", path.c_str());
-      return 1;
+      return false;
     }
     cases.push_back(cad_case(file));
   }
+  return true;
+}
 
-  const auto started = Clock::now();
+// Where one scenario's line is run: its case, noise and seed.
+struct LineRunContext {
+  const Case& c;
+  double noise;
+  int seed;
+  bool trace;
+};
+
+LineOutcome run_line(const PreparedMesh& mesh, const LineSpec& spec, const Variant& v, const LineRunContext& at) {
+  LineOutcome out;
+  out.seed = std::uint64_t(at.seed);
+  out.keys = spec.keys;
+  FeatureLineRequest request;
+  request.keys = spec.keys;
+  request.closed = spec.closed;
+  request.options = v.line;
+  try {
+    const auto r = detect_feature_line(mesh, request);
+    const auto refined = refined_positions(r);
+    if (at.trace) trace_line(at.c.name, at.noise, at.seed, mesh.statistics.noise, r, refined, spec);
+    out.initial = line_distance(r.initial_points, r.closed, spec.distance);
+    out.refined = line_distance(refined, r.closed, spec.distance);
+    out.turning = closed_turning(refined, r.closed);
+    out.iterations = r.iterations;
+    out.fallbacks = r.initial.fallbacks.size();
+    out.ms = r.timings.total_ms;
+    out.floor = surface_floor(mesh, spec);
+  } catch (const std::exception& e) {
+    out.failed = true;
+    out.error = e.what();
+  }
+  return out;
+}
+
+struct BenchResults {
   std::map<RowKey, Row> rows;
   std::map<std::string, std::size_t> chains_per_mesh;
+};
+
+// Every variant on one noisy copy of a scenario (meshes prepared once per preparation).
+void run_scenario(const RawMesh& noisy, const Scenario& scenario, const std::vector<Variant>& variants,
+                  const LineRunContext& at, std::size_t ci, std::size_t ni, BenchResults& results) {
+  std::map<std::string, std::shared_ptr<const PreparedMesh>> prepared;
+  for (std::size_t vi = 0; vi < variants.size(); ++vi) {
+    const Variant& v = variants[vi];
+    auto& mesh = prepared[prepare_key(v.prepare)];
+    if (!mesh) mesh = prepare_mesh(noisy, v.prepare);
+    Row& row = results.rows[{ci, ni, vi}];
+    row.triangles = mesh->statistics.faces;
+    for (const auto& spec : scenario.lines) row.lines.push_back(run_line(*mesh, spec, v, at));
+  }
+}
+
+BenchResults run_cases(const std::vector<Case>& cases, const std::vector<Variant>& variants, const BenchArgs& a) {
+  BenchResults results;
   for (std::size_t ci = 0; ci < cases.size(); ++ci) {
     const Case& c = cases[ci];
     for (std::size_t ni = 0; ni < c.noise_levels.size(); ++ni) {
       const double noise = c.noise_levels[ni];
-      const int runs = (noise == 0 && !c.seeded_mesh) ? 1 : seeds;  // a clean fixed mesh needs one run
+      const int runs = (noise == 0 && !c.seeded_mesh) ? 1 : a.seeds;  // a clean fixed mesh needs one run
       for (int seed = 1; seed <= runs; ++seed) {
         const Scenario scenario = c.build(std::uint64_t(seed));
-        if (c.group == "cad" && c.name.rfind("slab", 0) != 0) chains_per_mesh[c.name] = scenario.lines.size();
+        if (c.group == "cad" && c.name.rfind("slab", 0) != 0) results.chains_per_mesh[c.name] = scenario.lines.size();
         const double fraction = noise / 100 * scenario.noise_reference / mean_edge_length(scenario.mesh);
         const RawMesh noisy = with_noise(scenario.mesh, fraction, 1000003ull * std::uint64_t(seed) + 7);
-        std::map<std::string, std::shared_ptr<const PreparedMesh>> prepared;
-        for (std::size_t vi = 0; vi < variants.size(); ++vi) {
-          const Variant& v = variants[vi];
-          auto& mesh = prepared[prepare_key(v.prepare)];
-          if (!mesh) mesh = prepare_mesh(noisy, v.prepare);
-          Row& row = rows[{ci, ni, vi}];
-          row.triangles = mesh->statistics.faces;
-          for (const auto& spec : scenario.lines) {
-            LineOutcome out;
-            out.seed = std::uint64_t(seed);
-            out.keys = spec.keys;
-            FeatureLineRequest request;
-            request.keys = spec.keys;
-            request.closed = spec.closed;
-            request.options = v.line;
-            try {
-              const auto r = detect_feature_line(*mesh, request);
-              const auto refined = refined_positions(r);
-              if (trace) trace_line(c.name, noise, seed, mesh->statistics.noise, r, refined, spec);
-              out.initial = line_distance(r.initial_points, r.closed, spec.distance);
-              out.refined = line_distance(refined, r.closed, spec.distance);
-              out.turning = closed_turning(refined, r.closed);
-              out.iterations = r.iterations;
-              out.fallbacks = r.initial.fallbacks.size();
-              out.ms = r.timings.total_ms;
-              out.floor = surface_floor(*mesh, spec);
-            } catch (const std::exception& e) {
-              out.failed = true;
-              out.error = e.what();
-            }
-            row.lines.push_back(std::move(out));
-          }
-        }
+        run_scenario(noisy, scenario, variants, {c, noise, seed, a.trace}, ci, ni, results);
       }
     }
   }
-  const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
+  return results;
+}
 
+void print_header(int seeds, const std::vector<int>& sizes, const std::map<std::string, std::size_t>& chains_per_mesh) {
   std::printf("# bench_accuracy: %d seed%s, fields n = ", seeds, seeds == 1 ? "" : "s");
   for (std::size_t i = 0; i < sizes.size(); ++i) std::printf("%s%d", i ? ", " : "", sizes[i]);
   std::printf("\n\nCrease chains of >= 10 edges (find_crease_chains, 30 degrees):");
@@ -527,9 +567,13 @@ int main(int argc, char** argv) {
               "grid spacing (fields), outline edge (slab) or mesh mean edge (real CAD); worse: refined mean >\n"
               "initial mean + %.3f; floor (CAD): mean distance from the true crease to the nearest point of the\n"
               "(noisy) surface, under which no line lying on that surface can go.\n\n", kWorseTolerance);
+}
+
+// One row per variant, case and noise level.
+void print_rows(const BenchResults& results, const std::vector<Variant>& variants, const std::vector<Case>& cases) {
   std::printf("| variant | case | triangles | noise %% | lines | init mean | init max | ref mean | ref max | ref/init | floor | worse | turn | fallbk | iters | ms | err |\n");
   std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-  for (const auto& [key, row] : rows) {
+  for (const auto& [key, row] : results.rows) {
     const RowSummary s = summarize(row);
     char floor[16] = "-";
     if (s.floor >= 0) std::snprintf(floor, sizeof floor, "%.3f", s.floor);
@@ -539,71 +583,106 @@ int main(int argc, char** argv) {
                 s.refined_mean, s.refined_max, ratio_text(s.refined_mean, s.initial_mean).c_str(), floor, s.worse, s.turning,
                 s.fallbacks, s.iterations, s.ms, s.failed);
   }
+}
 
+// One variant's worst cases, smooth fields and CAD apart.
+struct VariantSummary {
+  double smooth_clean = -1, smooth_noisy = -1, cad_clean = -1, cad_noisy_ref = 0, cad_noisy_init = 0;
+  std::string smooth_clean_case, smooth_noisy_case, cad_clean_case;
+  std::size_t smooth_worse = 0, smooth_lines = 0, cad_worse = 0, cad_lines = 0, errors = 0;
+};
+
+VariantSummary summarize_variant(const BenchResults& results, const std::vector<Case>& cases, std::size_t vi) {
+  VariantSummary v;
+  for (const auto& [key, row] : results.rows) {
+    if (key.variant_index != vi) continue;
+    const Case& c = cases[key.case_index];
+    const double noise = c.noise_levels[key.noise_index];
+    const RowSummary s = summarize(row);
+    v.errors += s.failed;
+    const std::string label = c.name + " @" + std::to_string(int(noise)) + "%";
+    if (c.group == "smooth") {
+      v.smooth_worse += s.worse, v.smooth_lines += s.lines;
+      if (noise == 0 && s.refined_mean > v.smooth_clean) v.smooth_clean = s.refined_mean, v.smooth_clean_case = label;
+      if (noise >= 10 && noise <= 20 && s.refined_mean > v.smooth_noisy) v.smooth_noisy = s.refined_mean, v.smooth_noisy_case = label;
+    } else {
+      v.cad_worse += s.worse, v.cad_lines += s.lines;
+      if (noise == 0 && s.refined_mean > v.cad_clean) v.cad_clean = s.refined_mean, v.cad_clean_case = label;
+      if (noise > 0)
+        for (const auto& l : row.lines)
+          if (!l.failed) v.cad_noisy_ref += l.refined.mean, v.cad_noisy_init += l.initial.mean;
+    }
+  }
+  return v;
+}
+
+void print_summary(const BenchResults& results, const std::vector<Variant>& variants, const std::vector<Case>& cases) {
   std::printf("\n## Summary per variant\n\n");
   std::printf("| variant | smooth: worst clean ref mean | smooth: worst noisy (10-20%%) ref mean | smooth: worse lines |"
               " CAD: worst clean ref mean | CAD: noisy ref/init | CAD: worse lines | errors |\n");
   std::printf("|---|---|---|---:|---|---:|---:|---:|\n");
   for (std::size_t vi = 0; vi < variants.size(); ++vi) {
-    double smooth_clean = -1, smooth_noisy = -1, cad_clean = -1, cad_noisy_ref = 0, cad_noisy_init = 0;
-    std::string smooth_clean_case, smooth_noisy_case, cad_clean_case;
-    std::size_t smooth_worse = 0, smooth_lines = 0, cad_worse = 0, cad_lines = 0, errors = 0;
-    for (const auto& [key, row] : rows) {
-      if (key.variant_index != vi) continue;
-      const Case& c = cases[key.case_index];
-      const double noise = c.noise_levels[key.noise_index];
-      const RowSummary s = summarize(row);
-      errors += s.failed;
-      const std::string label = c.name + " @" + std::to_string(int(noise)) + "%";
-      if (c.group == "smooth") {
-        smooth_worse += s.worse, smooth_lines += s.lines;
-        if (noise == 0 && s.refined_mean > smooth_clean) smooth_clean = s.refined_mean, smooth_clean_case = label;
-        if (noise >= 10 && noise <= 20 && s.refined_mean > smooth_noisy) smooth_noisy = s.refined_mean, smooth_noisy_case = label;
-      } else {
-        cad_worse += s.worse, cad_lines += s.lines;
-        if (noise == 0 && s.refined_mean > cad_clean) cad_clean = s.refined_mean, cad_clean_case = label;
-        if (noise > 0)
-          for (const auto& l : row.lines)
-            if (!l.failed) cad_noisy_ref += l.refined.mean, cad_noisy_init += l.initial.mean;
-      }
-    }
+    const VariantSummary v = summarize_variant(results, cases, vi);
     std::printf("| %s | %.3f (%s) | %.3f (%s) | %zu/%zu | %.3f (%s) | %s | %zu/%zu | %zu |\n", variants[vi].name.c_str(),
-                smooth_clean, smooth_clean_case.c_str(), smooth_noisy, smooth_noisy_case.c_str(), smooth_worse,
-                smooth_lines, cad_clean, cad_clean_case.c_str(), ratio_text(cad_noisy_ref, cad_noisy_init).c_str(),
-                cad_worse, cad_lines, errors);
+                v.smooth_clean, v.smooth_clean_case.c_str(), v.smooth_noisy, v.smooth_noisy_case.c_str(), v.smooth_worse,
+                v.smooth_lines, v.cad_clean, v.cad_clean_case.c_str(), ratio_text(v.cad_noisy_ref, v.cad_noisy_init).c_str(),
+                v.cad_worse, v.cad_lines, v.errors);
   }
+}
 
-  if (worst_count > 0) {
-    struct Worst {
-      double excess;
-      std::string text;
-    };
-    std::vector<Worst> worst;
-    for (const auto& [key, row] : rows)
-      for (const auto& l : row.lines) {
-        if (l.failed || !l.worse()) continue;
-        std::string keys;
-        for (auto k : l.keys) keys += (keys.empty() ? "" : ",") + std::to_string(k);
-        char buffer[512];
-        std::snprintf(buffer, sizeof buffer, "| %s | %s | %.0f | %llu | %s | %.3f | %.3f | %.3f | %.3f |",
-                      variants[key.variant_index].name.c_str(), cases[key.case_index].name.c_str(),
-                      cases[key.case_index].noise_levels[key.noise_index], static_cast<unsigned long long>(l.seed),
-                      keys.c_str(), l.initial.mean, l.refined.mean, l.initial.max, l.refined.max);
-        worst.push_back({l.refined.mean - l.initial.mean, buffer});
-      }
-    std::sort(worst.begin(), worst.end(), [](const Worst& a, const Worst& b) { return a.excess > b.excess; });
-    std::printf("\n## Lines where the refined line is worse (largest excess first, at most %d of %zu)\n\n", worst_count,
-                worst.size());
-    std::printf("| variant | case | noise %% | seed | keys | init mean | ref mean | init max | ref max |\n");
-    std::printf("|---|---|---:|---:|---|---:|---:|---:|---:|\n");
-    for (std::size_t i = 0; i < worst.size() && i < std::size_t(worst_count); ++i) std::printf("%s\n", worst[i].text.c_str());
-    for (const auto& [key, row] : rows)
-      for (const auto& l : row.lines)
-        if (l.failed)
-          std::printf("error: %s, %s, noise %.0f%%, seed %llu: %s\n", variants[key.variant_index].name.c_str(),
-                      cases[key.case_index].name.c_str(), cases[key.case_index].noise_levels[key.noise_index],
-                      static_cast<unsigned long long>(l.seed), l.error.c_str());
-  }
+// The lines refining made worst (largest excess first), then every line that failed.
+void print_worst_lines(const BenchResults& results, const std::vector<Variant>& variants, const std::vector<Case>& cases,
+                       int worst_count) {
+  struct Worst {
+    double excess;
+    std::string text;
+  };
+  std::vector<Worst> worst;
+  for (const auto& [key, row] : results.rows)
+    for (const auto& l : row.lines) {
+      if (l.failed || !l.worse()) continue;
+      std::string keys;
+      for (auto k : l.keys) keys += (keys.empty() ? "" : ",") + std::to_string(k);
+      char buffer[512];
+      std::snprintf(buffer, sizeof buffer, "| %s | %s | %.0f | %llu | %s | %.3f | %.3f | %.3f | %.3f |",
+                    variants[key.variant_index].name.c_str(), cases[key.case_index].name.c_str(),
+                    cases[key.case_index].noise_levels[key.noise_index], static_cast<unsigned long long>(l.seed),
+                    keys.c_str(), l.initial.mean, l.refined.mean, l.initial.max, l.refined.max);
+      worst.push_back({l.refined.mean - l.initial.mean, buffer});
+    }
+  std::sort(worst.begin(), worst.end(), [](const Worst& a, const Worst& b) { return a.excess > b.excess; });
+  std::printf("\n## Lines where the refined line is worse (largest excess first, at most %d of %zu)\n\n", worst_count,
+              worst.size());
+  std::printf("| variant | case | noise %% | seed | keys | init mean | ref mean | init max | ref max |\n");
+  std::printf("|---|---|---:|---:|---|---:|---:|---:|---:|\n");
+  for (std::size_t i = 0; i < worst.size() && i < std::size_t(worst_count); ++i) std::printf("%s\n", worst[i].text.c_str());
+  for (const auto& [key, row] : results.rows)
+    for (const auto& l : row.lines)
+      if (l.failed)
+        std::printf("error: %s, %s, noise %.0f%%, seed %llu: %s\n", variants[key.variant_index].name.c_str(),
+                    cases[key.case_index].name.c_str(), cases[key.case_index].noise_levels[key.noise_index],
+                    static_cast<unsigned long long>(l.seed), l.error.c_str());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::optional<BenchArgs> args = parse_args(argc, argv);
+  if (!args) return 2;
+  const std::vector<Variant> variants = selected_variants(args->only);
+  if (variants.empty()) return 2;
+  const std::vector<int> sizes = field_sizes(*args);
+  std::vector<Case> cases;
+  if (!build_cases(*args, sizes, cases)) return 1;
+
+  const auto started = Clock::now();
+  const BenchResults results = run_cases(cases, variants, *args);
+  const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
+
+  print_header(args->seeds, sizes, results.chains_per_mesh);
+  print_rows(results, variants, cases);
+  print_summary(results, variants, cases);
+  if (args->worst_count > 0) print_worst_lines(results, variants, cases, args->worst_count);
   std::printf("\n%.1f s\n", seconds);
   return 0;
 }

@@ -374,19 +374,25 @@ int blur_limited_passes(const std::vector<Eigen::Vector3d>& P, const std::vector
 
 }  // namespace
 
+void check_curvature_options(const CurvatureOptions& options) {
+  using L = CurvatureLimits;
+  if (!L::radius_range.contains(options.radius))
+    throw InvalidInputError("curvature radius must be between 0 (automatic) and " + format_number(L::radius_range.max) +
+                            " edge lengths");
+  if (!L::smoothing_passes_range.contains(options.smoothing_passes))
+    throw InvalidInputError("curvature smoothing passes must be between 0 and " +
+                            format_number(L::smoothing_passes_range.max) + ", or -1 (automatic)");
+  if (!L::smoothing_tolerance_range.contains(options.smoothing_tolerance))
+    throw InvalidInputError("curvature smoothing tolerance must be between 0 and 1");
+  if (!L::crease_angle_range.contains(options.crease_angle))
+    throw InvalidInputError("crease angle must be at most " + format_number(L::crease_angle_range.max) +
+                            " degrees (0: automatic, negative: none)");
+}
+
 CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& positions,
                                        const std::vector<Eigen::Vector3d>& normals, const AdjacencyView& adjacency,
                                        const CurvatureOptions& options, const Cancellation* cancel) {
-  if (!(options.radius >= 0 && options.radius <= CurvatureLimits::max_radius))
-    throw InvalidInputError("curvature radius must be between 0 (automatic) and " +
-                            std::to_string(int(CurvatureLimits::max_radius)) + " edge lengths");
-  if (options.smoothing_passes < -1 || options.smoothing_passes > CurvatureLimits::max_smoothing_passes)
-    throw InvalidInputError("curvature smoothing passes must be between 0 and " +
-                            std::to_string(CurvatureLimits::max_smoothing_passes) + ", or -1 (automatic)");
-  if (!(options.smoothing_tolerance > 0 && options.smoothing_tolerance < 1))
-    throw InvalidInputError("curvature smoothing tolerance must be between 0 and 1");
-  if (!(options.crease_angle <= CurvatureLimits::max_crease_angle))
-    throw InvalidInputError("crease angle must be at most 179 degrees (0: automatic, negative: none)");
+  check_curvature_options(options);
   CurvatureField field;
   const std::size_t n = positions.size();
   field.mean = compute_mean_curvature(mesh, normals);

@@ -21,6 +21,7 @@
 #include "engine/cancellation.h"
 #include "engine/enum_names.h"
 #include "engine/tri_mesh.h"
+#include "engine/valid_range.h"
 
 namespace featureline {
 
@@ -56,7 +57,15 @@ struct CurvatureLimits {
   static constexpr double max_radius = 12;
   static constexpr int max_smoothing_passes = 100;
   static constexpr double max_crease_angle = 179;
+  /// What compute_curvature_field accepts; api/options_table.cpp's limits lie inside.
+  static constexpr ValidRange radius_range = closed_range(0, max_radius);
+  static constexpr ValidRange smoothing_passes_range = closed_range(-1, max_smoothing_passes);
+  static constexpr ValidRange smoothing_tolerance_range = open_range(0, 1);
+  static constexpr ValidRange crease_angle_range = at_most(max_crease_angle);
 };
+
+/// \throw InvalidInputError when an option is outside its range (CurvatureLimits::*_range).
+void check_curvature_options(const CurvatureOptions& options);
 
 struct CurvatureField {
   std::vector<double> mean;   ///< signed mean curvature (cotangent), positive on convex parts

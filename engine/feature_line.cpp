@@ -1,7 +1,9 @@
 #include "engine/feature_line.h"
 
+#include <algorithm>
 #include <chrono>
 #include <deque>
+#include <string>
 
 #include "engine/crease_fit.h"
 #include "engine/errors.h"
@@ -45,7 +47,189 @@ std::vector<SurfacePoint> vertex_points(const PreparedMesh& pm, const std::vecto
   return points;
 }
 
+// The line unrolled (a closed line repeats its first vertex at the end) and its keys' indices.
+struct UnrolledLine {
+  std::vector<std::uint32_t> vertices;
+  std::vector<std::size_t> key_at;
+};
+
+UnrolledLine unroll(const InitialLineResult& initial, bool closed) {
+  UnrolledLine line{initial.vertices, initial.key_indices};
+  if (closed) {
+    line.vertices.push_back(line.vertices.front());
+    line.key_at.push_back(line.vertices.size() - 1);
+  }
+  return line;
+}
+
+// Pieces between pinned points. A closed line always has at least two pieces: a loop laid
+// out as one open strip would meet itself at its first key.
+std::deque<Piece> pinned_pieces(const UnrolledLine& line, bool pin_interior_keys, bool closed,
+                                std::vector<std::string>& warnings) {
+  std::deque<Piece> pieces;
+  const std::vector<std::uint32_t>& v = line.vertices;
+  if (pin_interior_keys) {
+    for (std::size_t k = 0; k + 1 < line.key_at.size(); ++k) pieces.push_back({line.key_at[k], line.key_at[k + 1]});
+  } else if (closed) {
+    const std::size_t half = (v.size() - 1) / 2;
+    pieces.push_back({0, half});
+    pieces.push_back({half, v.size() - 1});
+    warnings.push_back("the closed line is refined as two halves pinned at its first key and at vertex " +
+                       std::to_string(v[half]) + " opposite it");
+  } else {
+    pieces.push_back({0, v.size() - 1});
+  }
+  return pieces;
+}
+
+// Clean creases are the feature itself: their runs are kept exactly. On a noisy mesh a crease
+// run is re-fitted instead of handed to the snake (see engine/crease_fit.h for why).
+void mark_crease_pieces(const PreparedMesh& pm, const FeatureLineOptions& options, const std::vector<std::uint32_t>& line,
+                        double feature_sign, std::deque<Piece>& pieces) {
+  if (options.exact_crease_edges <= 0) return;
+  const bool clean = pm.curvature.noise < options.exact_crease_noise;
+  for (Piece& piece : pieces) {
+    const bool long_enough = piece.end - piece.begin >= std::size_t(options.exact_crease_edges);
+    const double share = long_enough ? crease_share(pm, line, piece, feature_sign) : 0.0;
+    piece.exact = clean && share == 1.0;
+    piece.noisy_crease = !clean && share >= options.crease_fit.min_crease_share && options.crease_fit.bandwidth > 0;
+  }
+}
+
+// What refining every piece of one line reads.
+struct LineRun {
+  const PreparedMesh& pm;
+  const FeatureLineOptions& options;
+  const SnakeOptions& snake;  ///< the request's, with the line's feature sign
+  const Cancellation* cancel;
+  const std::vector<std::uint32_t>& line;  ///< unrolled
+};
+
+// One piece being refined: its vertices, its initial line's points, and what replaces them.
+struct PieceWork {
+  Piece piece;
+  std::vector<std::uint32_t> sub;  ///< the piece's line vertices, ends included
+  std::vector<SurfacePoint> initial_points;
+  std::vector<SurfacePoint> points;  ///< the piece's answer
+  PieceReport report;
+};
+
+PieceWork start_piece(const LineRun& run, const Piece& piece) {
+  PieceWork work;
+  work.piece = piece;
+  work.sub.assign(run.line.begin() + std::ptrdiff_t(piece.begin), run.line.begin() + std::ptrdiff_t(piece.end) + 1);
+  work.report.from = work.sub.front();
+  work.report.to = work.sub.back();
+  work.report.edges = work.sub.size() - 1;
+  work.initial_points = vertex_points(run.pm, work.sub);
+  work.report.initial_strength =
+      mean_feature_strength(run.pm, work.initial_points, run.snake.feature_sign, run.snake.curvature_cap);
+  return work;
+}
+
+void keep_initial(PieceWork& work, std::string reason) {
+  work.points = work.initial_points;
+  work.report.kept = "initial";
+  work.report.reason = std::move(reason);
+}
+
+// Split where the layout folded, keeping both halves at least min_piece_edges long (the
+// paper's remedy for highly curved lines). False when the piece is too short to split.
+bool split_where_folded(const LineRun& run, const Piece& piece, const FlatStrip& flat, std::deque<Piece>& pieces) {
+  const std::size_t shortest = std::size_t(run.options.min_piece_edges);
+  if (flat.flipped_near_line == 0 || piece.end - piece.begin < 2 * shortest) return false;
+  const std::size_t at = std::clamp(piece.begin + flat.worst_flip_line_index, piece.begin + shortest, piece.end - shortest);
+  pieces.push_front({at, piece.end, false});
+  pieces.push_front({piece.begin, at, false});
+  return true;
+}
+
+// Stages 3-4 on one piece's strip, never worse than the initial line.
+void snake_on_strip(const LineRun& run, const FeatureStrip& strip, const FlatStrip& flat, PieceWork& work,
+                    FeatureLineResult& result) {
+  try {
+    const SnakeResult snake = refine_with_snake(run.pm, strip, flat, run.snake, run.cancel);
+    work.points = map_to_surface(run.pm, strip, snake.points);
+    result.iterations += snake.iterations;
+    work.report.iterations = snake.iterations;
+    work.report.iteration_cap = !snake.converged && snake.iterations >= run.snake.max_iterations;
+    work.report.refined_strength = mean_feature_strength(run.pm, work.points, run.snake.feature_sign, run.snake.curvature_cap);
+    if (work.report.refined_strength < run.options.keep_initial_below * work.report.initial_strength) {
+      // Never worse: the snake left the feature (cut a corner, was drawn to another
+      // feature); the initial line is the better answer for this piece.
+      keep_initial(work, "the refined line was weaker on the feature than the initial line");
+    } else {
+      result.refined_by_snake = true;
+    }
+  } catch (const GeometryError& e) {
+    // A pinned end whose every strip triangle folded or distorted: keep this piece's
+    // initial line rather than failing the whole line, and say so.
+    keep_initial(work, e.what());
+    result.warnings.push_back("line vertices " + std::to_string(work.sub.front()) + ".." + std::to_string(work.sub.back()) +
+                              " were not refined: " + e.what());
+  }
+}
+
+// Stages 2-4 on one piece: strip, flattening, snake. False when the piece was split instead.
+bool refine_piece_with_snake(const LineRun& run, PieceWork& work, std::deque<Piece>& pieces, FeatureLineResult& result) {
+  auto t0 = Clock::now();
+  const FeatureStrip strip = extract_feature_strip(run.pm, work.sub, run.options.strip);
+  result.timings.strip_ms += ms_since(t0);
+  t0 = Clock::now();
+  const FlatStrip flat = flatten_strip(run.pm, strip, run.options.strip);
+  result.timings.flatten_ms += ms_since(t0);
+  if (split_where_folded(run, work.piece, flat, pieces)) {
+    ++result.splits;
+    return false;
+  }
+  if (flat.flipped_near_line > 0)
+    result.warnings.push_back("the strip around line vertices " + std::to_string(work.sub.front()) + ".." +
+                              std::to_string(work.sub.back()) + " folds over when flattened; refined where it is valid");
+  t0 = Clock::now();
+  snake_on_strip(run, strip, flat, work, result);
+  result.timings.snake_ms += ms_since(t0);
+  result.strip_faces += strip.triangles.size();
+  return true;
+}
+
+// One piece's answer: kept crease, re-fitted crease, a single edge, or the snake's line. False
+// when the piece was split instead (its halves are next in `pieces`).
+bool refine_piece(const LineRun& run, PieceWork& work, std::deque<Piece>& pieces, FeatureLineResult& result) {
+  if (work.piece.exact) {
+    work.points = work.initial_points;
+    work.report.kept = "crease";
+  } else if (work.piece.noisy_crease) {
+    work.points = fit_noisy_crease(run.pm, work.sub, run.options.crease_fit).points;
+    work.report.kept = "crease fit";
+    work.report.refined_strength = mean_feature_strength(run.pm, work.points, run.snake.feature_sign, run.snake.curvature_cap);
+  } else if (work.sub.size() < 3) {
+    keep_initial(work, "a single edge");  // a single edge is already straight on the surface
+  } else {
+    return refine_piece_with_snake(run, work, pieces, result);
+  }
+  return true;
+}
+
+// The line's snake options: the sign of the keys' feature when the request leaves it open.
+SnakeOptions line_snake_options(const PreparedMesh& pm, const FeatureLineRequest& request) {
+  SnakeOptions snake = request.options.snake;
+  if (snake.feature_sign == 0 && request.options.initial.sign_aware)
+    snake.feature_sign = keys_feature_sign(pm, request.keys, request.options.initial);
+  return snake;
+}
+
+void check_min_piece_edges(const FeatureLineOptions& options) {
+  if (!FeatureLineOptions::min_piece_edges_range.contains(options.min_piece_edges))
+    throw InvalidInputError("min_piece_edges must be at least " + format_number(FeatureLineOptions::min_piece_edges_range.min));
+}
+
 }  // namespace
+
+void check_feature_line_options(const FeatureLineOptions& options) {
+  check_min_piece_edges(options);
+  check_strip_options(options.strip);
+  check_snake_options(options.snake);
+}
 
 double mean_feature_strength(const PreparedMesh& pm, const std::vector<SurfacePoint>& points, double feature_sign,
                              double cap) {
@@ -76,7 +260,7 @@ double polyline_length(const std::vector<SurfacePoint>& points, bool closed) {
 FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineRequest& request) {
   const auto start = Clock::now();
   const FeatureLineOptions& options = request.options;
-  if (options.min_piece_edges < 2) throw InvalidInputError("min_piece_edges must be at least 2");
+  check_min_piece_edges(options);
   FeatureLineResult result;
   result.keys = request.keys;
   result.closed = request.closed;
@@ -86,130 +270,28 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   for (auto v : result.initial.vertices) result.initial_points.push_back(pm.positions[v]);
   result.timings.initial_ms = ms_since(start);
 
-  // The line unrolled: a closed line repeats its first vertex at the end.
-  std::vector<std::uint32_t> line = result.initial.vertices;
-  std::vector<std::size_t> key_at = result.initial.key_indices;
-  if (request.closed) {
-    line.push_back(line.front());
-    key_at.push_back(line.size() - 1);
-  }
-
-  if (!options.refine || line.size() < 3) {
-    for (std::size_t i = 0; i < result.initial.vertices.size(); ++i)
-      result.refined.push_back(surface_point_at_vertex(pm, result.initial.vertices[i]));
+  const UnrolledLine line = unroll(result.initial, request.closed);
+  if (!options.refine || line.vertices.size() < 3) {
+    result.refined = vertex_points(pm, result.initial.vertices);
     result.refined_length = polyline_length(result.refined, request.closed);
     result.timings.total_ms = ms_since(start);
     return result;
   }
 
-  // Pieces between pinned points. A closed line always has at least two pieces: a loop laid
-  // out as one open strip would meet itself at its first key.
-  std::deque<Piece> pieces;
-  if (options.pin_interior_keys) {
-    for (std::size_t k = 0; k + 1 < key_at.size(); ++k) pieces.push_back({key_at[k], key_at[k + 1]});
-  } else if (request.closed) {
-    const std::size_t half = (line.size() - 1) / 2;
-    pieces.push_back({0, half});
-    pieces.push_back({half, line.size() - 1});
-    result.warnings.push_back("the closed line is refined as two halves pinned at its first key and at vertex " +
-                              std::to_string(line[half]) + " opposite it");
-  } else {
-    pieces.push_back({0, line.size() - 1});
-  }
-
-  SnakeOptions snake_options = options.snake;
-  if (snake_options.feature_sign == 0 && options.initial.sign_aware)
-    snake_options.feature_sign = keys_feature_sign(pm, request.keys, options.initial);
-  // Clean creases are the feature itself: their runs are kept exactly. On a noisy mesh a crease
-  // run is re-fitted instead of handed to the snake (see engine/crease_fit.h for why).
-  if (options.exact_crease_edges > 0) {
-    const bool clean = pm.curvature.noise < options.exact_crease_noise;
-    for (Piece& piece : pieces) {
-      const bool long_enough = piece.end - piece.begin >= std::size_t(options.exact_crease_edges);
-      const double share = long_enough ? crease_share(pm, line, piece, snake_options.feature_sign) : 0.0;
-      piece.exact = clean && share == 1.0;
-      piece.noisy_crease = !clean && share >= options.crease_fit.min_crease_share && options.crease_fit.bandwidth > 0;
-    }
-  }
-
+  std::deque<Piece> pieces = pinned_pieces(line, options.pin_interior_keys, request.closed, result.warnings);
+  const SnakeOptions snake_options = line_snake_options(pm, request);
+  mark_crease_pieces(pm, options, line.vertices, snake_options.feature_sign, pieces);
+  const LineRun run{pm, options, snake_options, request.cancel, line.vertices};
   std::vector<SurfacePoint>& refined = result.refined;
   while (!pieces.empty()) {
     throw_if_cancelled(request.cancel);
-    const Piece piece = pieces.front();
+    PieceWork work = start_piece(run, pieces.front());
     pieces.pop_front();
-    const std::vector<std::uint32_t> sub(line.begin() + std::ptrdiff_t(piece.begin), line.begin() + std::ptrdiff_t(piece.end) + 1);
-    std::vector<SurfacePoint> points;
-    PieceReport report;
-    report.from = sub.front();
-    report.to = sub.back();
-    report.edges = sub.size() - 1;
-    const auto initial_points = vertex_points(pm, sub);
-    report.initial_strength = mean_feature_strength(pm, initial_points, snake_options.feature_sign, snake_options.curvature_cap);
-    if (piece.exact) {
-      points = initial_points;
-      report.kept = "crease";
-    } else if (piece.noisy_crease) {
-      points = fit_noisy_crease(pm, sub, options.crease_fit).points;
-      report.kept = "crease fit";
-      report.refined_strength = mean_feature_strength(pm, points, snake_options.feature_sign, snake_options.curvature_cap);
-    } else if (sub.size() < 3) {
-      // a single edge is already straight on the surface
-      points = initial_points;
-      report.kept = "initial";
-      report.reason = "a single edge";
-    } else {
-      auto t0 = Clock::now();
-      const FeatureStrip strip = extract_feature_strip(pm, sub, options.strip);
-      result.timings.strip_ms += ms_since(t0);
-      t0 = Clock::now();
-      const FlatStrip flat = flatten_strip(pm, strip, options.strip);
-      result.timings.flatten_ms += ms_since(t0);
-      const std::size_t edges = piece.end - piece.begin;
-      if (flat.flipped_near_line > 0 && edges >= 2 * std::size_t(options.min_piece_edges)) {
-        // Split where the layout folded, keeping both halves at least min_piece_edges long.
-        std::size_t at = piece.begin + flat.worst_flip_line_index;
-        at = std::clamp(at, piece.begin + std::size_t(options.min_piece_edges), piece.end - std::size_t(options.min_piece_edges));
-        pieces.push_front({at, piece.end, false});
-        pieces.push_front({piece.begin, at, false});
-        ++result.splits;
-        continue;
-      }
-      if (flat.flipped_near_line > 0)
-        result.warnings.push_back("the strip around line vertices " + std::to_string(sub.front()) + ".." +
-                                  std::to_string(sub.back()) + " folds over when flattened; refined where it is valid");
-      t0 = Clock::now();
-      try {
-        const SnakeResult snake = refine_with_snake(pm, strip, flat, snake_options, request.cancel);
-        points = map_to_surface(pm, strip, snake.points);
-        result.iterations += snake.iterations;
-        report.iterations = snake.iterations;
-        report.iteration_cap = !snake.converged && snake.iterations >= snake_options.max_iterations;
-        report.refined_strength = mean_feature_strength(pm, points, snake_options.feature_sign, snake_options.curvature_cap);
-        if (report.refined_strength < options.keep_initial_below * report.initial_strength) {
-          // Never worse: the snake left the feature (cut a corner, was drawn to another
-          // feature); the initial line is the better answer for this piece.
-          points = initial_points;
-          report.kept = "initial";
-          report.reason = "the refined line was weaker on the feature than the initial line";
-        } else {
-          result.refined_by_snake = true;
-        }
-      } catch (const GeometryError& e) {
-        // A pinned end whose every strip triangle folded or distorted: keep this piece's
-        // initial line rather than failing the whole line, and say so.
-        points = initial_points;
-        report.kept = "initial";
-        report.reason = e.what();
-        result.warnings.push_back("line vertices " + std::to_string(sub.front()) + ".." + std::to_string(sub.back()) +
-                                  " were not refined: " + e.what());
-      }
-      result.timings.snake_ms += ms_since(t0);
-      result.strip_faces += strip.triangles.size();
-    }
+    if (!refine_piece(run, work, pieces, result)) continue;
     ++result.pieces;
-    result.piece_reports.push_back(std::move(report));
+    result.piece_reports.push_back(std::move(work.report));
     // Pieces meet at pinned vertices: keep the shared point once.
-    refined.insert(refined.end(), points.begin() + (refined.empty() ? 0 : 1), points.end());
+    refined.insert(refined.end(), work.points.begin() + (refined.empty() ? 0 : 1), work.points.end());
   }
   if (request.closed && refined.size() > 1) refined.pop_back();  // back at the first key
   result.refined_length = polyline_length(refined, request.closed);

@@ -37,7 +37,15 @@ struct FeatureLineOptions {
   /// Never worse: a refined piece whose mean feature strength along it falls below this share
   /// of its initial line's is replaced by the initial line (and reported in `pieces`).
   double keep_initial_below = 0.9;
+
+  /// What detect_feature_line accepts; api/options_table.cpp's limits lie inside.
+  static constexpr ValidRange min_piece_edges_range = at_least(2);
 };
+
+/// Checks the options detect_feature_line checks before it starts (min_piece_edges) and those
+/// its stages check when they run (strip, snake), so options built in code fail up front.
+/// \throw InvalidInputError naming the first option out of its range.
+void check_feature_line_options(const FeatureLineOptions& options);
 
 struct FeatureLineRequest {
   std::vector<std::uint32_t> keys;

@@ -74,9 +74,14 @@ std::vector<Eigen::Vector2d> embed_line(const PreparedMesh& pm, const std::vecto
   return p;
 }
 
+void check_strip_options(const StripOptions& options) {
+  if (!StripOptions::rings_range.contains(options.rings))
+    throw InvalidInputError("strip rings must be between 0 (automatic) and " + std::to_string(StripOptions::max_rings));
+}
+
 FeatureStrip extract_feature_strip(const PreparedMesh& pm, const std::vector<std::uint32_t>& line, const StripOptions& options) {
   if (line.size() < 2) throw InvalidInputError("a feature strip needs a line of at least two vertices");
-  if (options.rings < 0 || options.rings > 8) throw InvalidInputError("strip rings must be between 0 (automatic) and 8");
+  check_strip_options(options);
   FeatureStrip strip;
   strip.rings = options.rings;
   // Automatic: wider strips for longer lines. An edge path's distance from the true feature

@@ -12,6 +12,7 @@
 
 #include "engine/enum_names.h"
 #include "engine/prepared_mesh.h"
+#include "engine/valid_range.h"
 
 namespace featureline {
 
@@ -49,7 +50,14 @@ struct StripOptions {
   /// closes many triangles with the line (the centre of a fan, a cone tip) can distort its
   /// triangles arbitrarily; the snake must not be steered by them.
   double max_edge_distortion = 0.35;
+
+  /// What the strip accepts (check_strip_options); api/options_table.cpp's limits lie inside.
+  static constexpr int max_rings = 8;
+  static constexpr ValidRange rings_range = closed_range(0, max_rings);
 };
+
+/// \throw InvalidInputError when an option is outside its range (StripOptions::*_range).
+void check_strip_options(const StripOptions& options);
 
 /// A strip of the mesh around an open line, with its own compact indices.
 struct FeatureStrip {

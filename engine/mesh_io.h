@@ -20,13 +20,21 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/enum_names.h"
+
 namespace featureline {
 
 enum class MeshFormat { obj, off, ply, stl, gltf, glb, drc };
+/// Lower case, as used in `?format=` and file extensions; to_string(MeshFormat) prints them.
+template <>
+struct EnumNames<MeshFormat> {
+  static constexpr std::array<std::pair<MeshFormat, const char*>, 7> entries{
+      {{MeshFormat::obj, "obj"}, {MeshFormat::off, "off"}, {MeshFormat::ply, "ply"}, {MeshFormat::stl, "stl"},
+       {MeshFormat::gltf, "gltf"}, {MeshFormat::glb, "glb"}, {MeshFormat::drc, "drc"}}};
+};
 
-/// "obj", "off", ... (lower case, as used in `?format=` and file extensions).
-std::string to_string(MeshFormat format);
-/// Parses "obj", "OFF", "glb", ... ; std::nullopt for anything else.
+/// Parses "obj", "OFF", "glb", ... in any case (file extensions come in both); std::nullopt
+/// for anything else.
 std::optional<MeshFormat> parse_mesh_format(std::string_view name);
 /// Format from a file name's extension; std::nullopt when unknown.
 std::optional<MeshFormat> mesh_format_from_path(std::string_view path);

@@ -10,17 +10,23 @@
 #include "engine/segmentation/stages.h"
 
 namespace featureline {
+
+void check_segmentation_options(const SegmentationOptions& options) {
+  using O = SegmentationOptions;
+  if (!O::min_segment_area_fraction_range.contains(options.min_segment_area_fraction))
+    throw InvalidInputError("min_segment_area_fraction must be in " + describe(O::min_segment_area_fraction_range));
+  if (!O::attach_distance_range.contains(options.attach_distance))
+    throw InvalidInputError("attach_distance must be a finite number >= " + format_number(O::attach_distance_range.min));
+  if (!O::remesh_snap_range.contains(options.remesh_snap))
+    throw InvalidInputError("remesh_snap must be in " + describe(O::remesh_snap_range));
+}
+
 namespace {
 
 void check_segmentation_input(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& lines,
                               const SegmentationOptions& options) {
   if (lines.empty()) throw InvalidInputError("segmentation needs at least one feature line");
-  if (!(options.min_segment_area_fraction >= 0 && options.min_segment_area_fraction < 1))
-    throw InvalidInputError("min_segment_area_fraction must be in [0, 1)");
-  if (!(options.attach_distance >= 0 && std::isfinite(options.attach_distance)))
-    throw InvalidInputError("attach_distance must be a finite number >= 0");
-  if (!(options.remesh_snap >= 0 && options.remesh_snap < 0.25))
-    throw InvalidInputError("remesh_snap must be in [0, 0.25)");
+  check_segmentation_options(options);
   for (std::size_t i = 0; i < lines.size(); ++i) {
     if (lines[i].refined.size() < 2)
       throw InvalidInputError("line " + std::to_string(i) + " has fewer than two refined points");
@@ -46,9 +52,9 @@ SegmentationResult segment_mesh(const PreparedMesh& mesh, const std::vector<Feat
   VertexFaces remeshed_vertex_faces;
   std::vector<Triangle> remeshed_neighbors;
   if (options.mode == SegmentationMode::snap) {
-    cut.cuts = cut_along_nearest_vertices(mesh, lines, options, report);
+    cut.cuts = cut_along_nearest_vertices(mesh, lines, options, report, cancel);
   } else {
-    RemeshedCut remeshed = cut_along_lines_by_remeshing(mesh, lines, options, report);
+    RemeshedCut remeshed = cut_along_lines_by_remeshing(mesh, lines, options, report, cancel);
     result.positions = std::move(remeshed.positions);
     result.triangles = std::move(remeshed.triangles);
     result.source_faces = std::move(remeshed.source_faces);

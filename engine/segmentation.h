@@ -19,6 +19,7 @@
 
 #include "engine/feature_line.h"
 #include "engine/prepared_mesh.h"
+#include "engine/valid_range.h"
 
 namespace featureline {
 
@@ -44,7 +45,15 @@ struct SegmentationOptions {
   /// to a vertex or an edge is moved onto it, so the remeshed faces have no needles. 0 keeps
   /// every crossing where it is (to 1e-6).
   double remesh_snap = 0.01;
+
+  /// What segment_mesh accepts; api/options_table.cpp's limits lie inside.
+  static constexpr ValidRange min_segment_area_fraction_range = half_open_range(0, 1);
+  static constexpr ValidRange attach_distance_range = finite_from(0);
+  static constexpr ValidRange remesh_snap_range = half_open_range(0, 0.25);
 };
+
+/// \throw InvalidInputError when an option is outside its range (SegmentationOptions::*_range).
+void check_segmentation_options(const SegmentationOptions& options);
 
 /// One part of the decomposition.
 struct Segment {

@@ -7,6 +7,7 @@
 
 #include "engine/errors.h"
 #include "engine/internal/geometry.h"
+#include "engine/internal/snake_force.h"
 
 namespace featureline {
 namespace {
@@ -180,55 +181,309 @@ Eigen::SparseMatrix<double> stiffness(std::size_t n, double alpha, double beta) 
   return A;
 }
 
-// At a sharp crest (a crease vertex, where |C| drops steeply on both sides of the line) the
-// potential has a kink, and any average of the one-sided gradients points towards the flatter
-// side, pushing the line off the crease. There the gradient's component across the line is
-// set to zero, so the crest itself is the force's zero. Smooth ridges, whose neighbours drop
-// only a little, keep their interpolated gradients and with them sub-edge accuracy.
-void zero_gradient_across_sharp_crests(const FeatureStrip& strip, const FlatStrip& flat, const std::vector<double>& potential,
-                                       double drop, std::vector<Eigen::Vector2d>& gradient) {
-  if (!(drop > 0) || drop >= 1) return;
-  const std::size_t nv = strip.vertices.size();
-  // Tangent of the line at each line vertex, then at every strip vertex from the nearest line vertex.
-  std::vector<Eigen::Vector2d> line_tangent(strip.line.size());
-  for (std::size_t i = 0; i < strip.line.size(); ++i) {
-    const auto a = strip.line[i == 0 ? 0 : i - 1], b = strip.line[std::min(i + 1, strip.line.size() - 1)];
-    line_tangent[i] = (flat.uv[b] - flat.uv[a]).normalized();
-  }
-  std::vector<double> highest_left(nv, -1), highest_right(nv, -1);
-  std::vector<Eigen::Vector2d> normal(nv, Eigen::Vector2d::Zero());
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (!flat.placed[v]) continue;
-    std::size_t nearest = 0;
-    double best = HUGE_VAL;
-    for (std::size_t i = 0; i < strip.line.size(); ++i) {
-      const double d = (flat.uv[strip.line[i]] - flat.uv[v]).squaredNorm();
-      if (d < best) best = d, nearest = i;
+// ---------------------------------------------------------------------------------------------
+// The stages of refine_with_snake. Distances are in strip edge lengths ("unit") inside the
+// linear system and the force, in strip coordinates where points are placed.
+
+// A valid triangle at each strip vertex (and the vertex's corner in it), to start walks from.
+struct VertexStarts {
+  std::vector<std::int64_t> triangle;  ///< -1: no valid triangle around the vertex
+  std::vector<int> corner;
+};
+
+VertexStarts vertex_starts(const FeatureStrip& strip, const FlatStrip& flat) {
+  VertexStarts starts{std::vector<std::int64_t>(strip.vertices.size(), -1), std::vector<int>(strip.vertices.size(), 0)};
+  for (std::size_t t = 0; t < strip.triangles.size(); ++t)
+    if (flat.triangle_valid[t])
+      for (int k = 0; k < 3; ++k)
+        if (starts.triangle[strip.triangles[t][k]] < 0)
+          starts.triangle[strip.triangles[t][k]] = std::int64_t(t), starts.corner[strip.triangles[t][k]] = k;
+  return starts;
+}
+
+StripPoint point_at_vertex(const VertexStarts& starts, const FlatStrip& flat, std::uint32_t v) {
+  if (starts.triangle[v] < 0) throw GeometryError("the feature strip could not be flattened around a line vertex");
+  StripPoint p;
+  p.triangle = std::uint32_t(starts.triangle[v]);
+  p.barycentric = Eigen::Vector3d::Zero();
+  p.barycentric[starts.corner[v]] = 1;
+  p.uv = flat.uv[v];
+  return p;
+}
+
+// The initial snake v_0 of Eq. (15): the flattened line P* (Eq. 11) resampled at spacing h.
+std::vector<StripPoint> initial_snake(const FeatureStrip& strip, const FlatStrip& flat, const VertexStarts& starts, double h) {
+  std::vector<StripPoint> points;
+  points.push_back(point_at_vertex(starts, flat, strip.line.front()));
+  for (std::size_t i = 0; i + 1 < strip.line.size(); ++i) {
+    const Eigen::Vector2d a = flat.uv[strip.line[i]], b = flat.uv[strip.line[i + 1]];
+    const int pieces = std::max(1, int(std::lround((b - a).norm() / h)));
+    // Restart at each line vertex when it has a valid triangle; otherwise walk on from the
+    // previous sample.
+    StripPoint last = i == 0 || starts.triangle[strip.line[i]] < 0 ? points.back() : point_at_vertex(starts, flat, strip.line[i]);
+    for (int k = 1; k < pieces; ++k) {
+      StripPoint p = last;
+      walk(strip, flat, last.triangle, a + (b - a) * (double(k) / pieces), p);
+      points.push_back(p);
+      last = p;
     }
-    normal[v] = Eigen::Vector2d(-line_tangent[nearest].y(), line_tangent[nearest].x());
+    if (i + 2 < strip.line.size()) {
+      // interior line vertices are ordinary, free snake points
+      StripPoint p = last;
+      walk(strip, flat, last.triangle, b, p);
+      points.push_back(p);
+    }
   }
-  // Highest potential among the neighbours on each side of the line (through triangle edges).
-  for (std::size_t t = 0; t < strip.triangles.size(); ++t) {
-    if (!flat.triangle_valid[t]) continue;
-    for (int k = 0; k < 3; ++k)
-      for (int j = 0; j < 3; ++j) {
-        if (j == k) continue;
-        const auto v = strip.triangles[t][k], w = strip.triangles[t][j];
-        const Eigen::Vector2d d = (flat.uv[w] - flat.uv[v]).normalized();
-        const double across = d.dot(normal[v]);
-        if (across > 0.5) highest_left[v] = std::max(highest_left[v], potential[w]);
-        if (across < -0.5) highest_right[v] = std::max(highest_right[v], potential[w]);
+  points.push_back(point_at_vertex(starts, flat, strip.line.back()));
+  return points;
+}
+
+// What every stage of one run reads.
+struct SnakeRun {
+  const FeatureStrip& strip;
+  const FlatStrip& flat;
+  const SnakeOptions& o;
+  const ForceField& force;
+  double unit;         ///< strip edge length: the scale of the linear system
+  double h;            ///< target spacing of the points (strip coordinates)
+  std::size_t max_points;
+};
+
+// Paper: points farther apart than 3h/2 get points between them, points closer than h/2 are
+// deleted (the varying dimension of Eq. 15). The normal step then spreads them evenly, as it
+// never moves them along the line; `damping` is the share of the way it spreads them.
+void resample(const SnakeRun& run, std::vector<StripPoint>& points, double damping) {
+  const double h = run.h;
+  std::vector<StripPoint> next;
+  next.reserve(points.size() + 8);
+  next.push_back(points.front());
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    const bool last = i + 1 == points.size();
+    const double gap = (points[i].uv - next.back().uv).norm();
+    if (!last && gap < 0.5 * h) continue;  // too close: delete
+    const int pieces = int(std::ceil(gap / h));
+    // Bounded work whatever the options: a line may at most quadruple its initial point count
+    // (an extreme kappa once made it 209,204 points and 51 s; ../shared/data/regressions).
+    const bool room = next.size() + (points.size() - i) + std::size_t(pieces) <= run.max_points;
+    if (gap > 1.5 * h && room) {  // too far: insert evenly
+      const StripPoint from = next.back();
+      for (int k = 1; k < pieces; ++k) {
+        StripPoint p = from;
+        walk(run.strip, run.flat, from.triangle, from.uv + (points[i].uv - from.uv) * (double(k) / pieces), p);
+        next.push_back(p);
       }
+    }
+    next.push_back(points[i]);
   }
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (highest_left[v] < 0 || highest_right[v] < 0 || !(potential[v] > 0)) continue;
-    const double limit = (1 - drop) * potential[v];
-    if (highest_left[v] <= limit && highest_right[v] <= limit)
-      gradient[v] -= gradient[v].dot(normal[v]) * normal[v];
+  // the last kept interior point may now sit too close to the pinned end
+  if (next.size() > 2 && (next.back().uv - next[next.size() - 2].uv).norm() < 0.5 * h) next.erase(next.end() - 2);
+  points.swap(next);
+  if (run.o.normal_step) spread_evenly(run.strip, run.flat, points, damping);
+}
+
+// The linear system of Eq. (15) and its buffers, kept across iterations: it is refactored only
+// when resampling changed the number of points.
+struct SnakeSystem {
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> solver;
+  Eigen::SparseMatrix<double> A, M;
+  std::vector<Eigen::Triplet<double>> triplets;
+  std::size_t factored_size = 0;
+  Eigen::VectorXd x, y, rhs_x, rhs_y;  ///< positions v_k in units, right-hand sides
+  std::vector<Eigen::Vector2d> normal;
+};
+
+// Loads v_k (in units) and rebuilds A when the number of points changed.
+void load_positions(const SnakeRun& run, const std::vector<StripPoint>& points, SnakeSystem& sys) {
+  const std::size_t n = points.size();
+  if (Eigen::Index(n) != sys.A.rows()) sys.A = stiffness(n, run.o.alpha, run.o.beta);
+  sys.x.resize(Eigen::Index(n));
+  sys.y.resize(Eigen::Index(n));
+  for (std::size_t i = 0; i < n; ++i)
+    sys.x[Eigen::Index(i)] = points[i].uv.x() / run.unit, sys.y[Eigen::Index(i)] = points[i].uv.y() / run.unit;
+}
+
+// Each interior point's normal: the chord between its neighbours turned by 90 degrees.
+void chord_normals(SnakeSystem& sys, std::size_t n) {
+  sys.normal.assign(n, Eigen::Vector2d::Zero());
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const Eigen::Vector2d chord(sys.x[Eigen::Index(i + 1)] - sys.x[Eigen::Index(i - 1)],
+                                sys.y[Eigen::Index(i + 1)] - sys.y[Eigen::Index(i - 1)]);
+    const double length = chord.norm();
+    if (length > 0) sys.normal[i] = Eigen::Vector2d(-chord.y(), chord.x()) / length;
+  }
+}
+
+// Eq. (15) restricted to moves s_i along each point's normal n_i (N = diag(n_i)):
+//   (I + tau N'AN + tau K) s = tau N'(kappa F - A v),
+// K = diag(max(0, -kappa n_i' J n_i)) the smooth force's restoring stiffness (J its Jacobian),
+// so steep forces do not overshoot. Assembles M and rhs_x for the interior points; the pinned
+// ends enter through A v.
+void assemble_normal_system(const SnakeRun& run, const std::vector<StripPoint>& points, SnakeSystem& sys) {
+  const SnakeOptions& o = run.o;
+  const std::size_t n = points.size(), m = n - 2;
+  const Eigen::VectorXd ax = sys.A * sys.x, ay = sys.A * sys.y;
+  sys.rhs_x.resize(Eigen::Index(m));
+  sys.triplets.clear();
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const Eigen::Vector2d residual =
+        o.kappa * force_at(run.force, run.strip, points[i]) - Eigen::Vector2d(ax[Eigen::Index(i)], ay[Eigen::Index(i)]);
+    sys.rhs_x[Eigen::Index(i - 1)] = o.tau * sys.normal[i].dot(residual);
+    double stiffness_i = 0;
+    if (!run.force.jacobian.empty())
+      stiffness_i = std::max(0.0, -o.kappa * sys.normal[i].dot(run.force.jacobian[points[i].triangle] * sys.normal[i]));
+    sys.triplets.emplace_back(i - 1, i - 1, 1.0 + o.tau * stiffness_i);
+  }
+  for (Eigen::Index k = 0; k < sys.A.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(sys.A, k); it; ++it) {
+      const auto r = std::size_t(it.row()), c = std::size_t(it.col());
+      if (r == 0 || c == 0 || r + 1 == n || c + 1 == n) continue;
+      sys.triplets.emplace_back(r - 1, c - 1, o.tau * it.value() * sys.normal[r].dot(sys.normal[c]));
+    }
+  sys.M.resize(Eigen::Index(m), Eigen::Index(m));
+  sys.M.setFromTriplets(sys.triplets.begin(), sys.triplets.end());
+}
+
+// One normal step: each interior point's target, its solved move along its normal, damped and
+// held to the trust region max_step.
+void normal_step_targets(const SnakeRun& run, const std::vector<StripPoint>& points, double damping, SnakeSystem& sys,
+                         std::vector<Eigen::Vector2d>& targets) {
+  const std::size_t n = points.size();
+  chord_normals(sys, n);
+  assemble_normal_system(run, points, sys);
+  if (n != sys.factored_size) sys.solver.analyzePattern(sys.M);
+  sys.factored_size = n;
+  sys.solver.factorize(sys.M);
+  if (sys.solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
+  const Eigen::VectorXd s = sys.solver.solve(sys.rhs_x);
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const double move = std::clamp(damping * s[Eigen::Index(i - 1)], -run.o.max_step, run.o.max_step);
+    targets[i] = Eigen::Vector2d(sys.x[Eigen::Index(i)], sys.y[Eigen::Index(i)]) + move * sys.normal[i];
+  }
+}
+
+// The paper step's force term tau kappa F of Eq. (15) at interior point i, optionally without
+// its component along the line, capped so a point never jumps across a crest in one iteration.
+Eigen::Vector2d paper_force_step(const SnakeRun& run, const std::vector<StripPoint>& points, std::size_t i) {
+  const SnakeOptions& o = run.o;
+  Eigen::Vector2d step = o.tau * o.kappa * force_at(run.force, run.strip, points[i]);
+  if (o.normal_force_only) {
+    const Eigen::Vector2d chord = points[i + 1].uv - points[i - 1].uv;
+    const double chord_len = chord.norm();
+    if (chord_len > 0) step -= step.dot(chord / chord_len) * (chord / chord_len);
+  }
+  const double len = step.norm();
+  if (len > o.max_step) step *= o.max_step / len;
+  return step;
+}
+
+// Factors (I + tau A) restricted to the interior points, when the number of points changed.
+void factor_paper_system(const SnakeRun& run, std::size_t n, SnakeSystem& sys) {
+  if (n == sys.factored_size) return;
+  const Eigen::Index m = Eigen::Index(n - 2);
+  Eigen::SparseMatrix<double> Mi = sys.A.block(1, 1, m, m) * run.o.tau;
+  for (Eigen::Index i = 0; i < m; ++i) Mi.coeffRef(i, i) += 1.0;
+  sys.solver.compute(Mi);
+  if (sys.solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
+  sys.factored_size = n;
+}
+
+// The paper's Eq. (15) on both coordinates: (I + tau A) v_{k+1} = v_k + tau kappa F, explicit in
+// the force; the targets are damped towards the solution.
+void paper_step_targets(const SnakeRun& run, const std::vector<StripPoint>& points, double damping, SnakeSystem& sys,
+                        std::vector<Eigen::Vector2d>& targets) {
+  const std::size_t n = points.size();
+  const auto last = Eigen::Index(n - 1);
+  factor_paper_system(run, n, sys);
+  // Pinned ends enter the right-hand side through A's coupling columns.
+  Eigen::VectorXd ends_x = Eigen::VectorXd::Zero(Eigen::Index(n)), ends_y = Eigen::VectorXd::Zero(Eigen::Index(n));
+  ends_x[0] = sys.x[0], ends_x[last] = sys.x[last];
+  ends_y[0] = sys.y[0], ends_y[last] = sys.y[last];
+  const Eigen::VectorXd coupling_x = sys.A * ends_x, coupling_y = sys.A * ends_y;
+  sys.rhs_x.resize(Eigen::Index(n - 2));
+  sys.rhs_y.resize(Eigen::Index(n - 2));
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const Eigen::Vector2d step = paper_force_step(run, points, i);
+    const auto r = Eigen::Index(i - 1), at = Eigen::Index(i);
+    sys.rhs_x[r] = sys.x[at] + step.x() - run.o.tau * coupling_x[at];
+    sys.rhs_y[r] = sys.y[at] + step.y() - run.o.tau * coupling_y[at];
+  }
+  const Eigen::VectorXd new_x = sys.solver.solve(sys.rhs_x), new_y = sys.solver.solve(sys.rhs_y);
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const Eigen::Vector2d target(new_x[Eigen::Index(i - 1)], new_y[Eigen::Index(i - 1)]);
+    const Eigen::Vector2d now(sys.x[Eigen::Index(i)], sys.y[Eigen::Index(i)]);
+    targets[i] = now + damping * (target - now);
+  }
+}
+
+// Convergence is judged on the line's shape over windows of an even number of iterations, so a
+// point swinging between two states cancels out. A window whose shape change exceeds the
+// previous one's means the line is not settling (a point held by the strip's border, a force
+// kink); the step is halved then, so the snake always comes to rest.
+struct ConvergenceWindow {
+  int length = 2;
+  std::vector<Eigen::Vector2d> start;  ///< the line at the window's start
+  double last_change = HUGE_VAL;
+  double damping = 1;                  ///< share of each solved move that is taken
+};
+
+// At a window's end: records the shape change per iteration and says whether it is below the
+// tolerance (the paper's "total displacement is low enough"); damps the moves when it grew.
+bool window_settled(ConvergenceWindow& window, const SnakeRun& run, const std::vector<StripPoint>& points,
+                    SnakeResult& result) {
+  const double change = mean_distance_to(points, window.start) / run.unit / double(window.length);
+  result.last_displacement = change;
+  if (change < run.o.tolerance) return true;
+  if (change > window.last_change) window.damping *= 0.5;
+  window.last_change = change;
+  return false;
+}
+
+// Iterates Eq. (15) until the line settles, the iteration cap, or cancellation.
+void iterate_snake(const SnakeRun& run, SnakeResult& result, const Cancellation* cancel) {
+  const SnakeOptions& o = run.o;
+  std::vector<StripPoint>& points = result.points;
+  SnakeSystem sys;
+  ConvergenceWindow window;
+  window.length = 2 * o.resample_every;
+  std::vector<Eigen::Vector2d> targets;
+  for (int iteration = 0; iteration < o.max_iterations; ++iteration) {
+    throw_if_cancelled(cancel);
+    if (iteration % o.resample_every == 0) resample(run, points, window.damping);
+    const std::size_t n = points.size();
+    if (n <= 2) {
+      result.converged = true;
+      break;
+    }
+    if (iteration % window.length == 0) {
+      window.start.clear();
+      for (const auto& p : points) window.start.push_back(p.uv);
+    }
+    load_positions(run, points, sys);
+    targets.assign(n, Eigen::Vector2d::Zero());
+    if (o.normal_step) normal_step_targets(run, points, window.damping, sys, targets);
+    else paper_step_targets(run, points, window.damping, sys, targets);
+    for (std::size_t i = 1; i + 1 < n; ++i)
+      if (targets[i].allFinite()) move_along_segment(run.strip, run.flat, points[i], targets[i] * run.unit);
+    result.iterations = iteration + 1;
+    if ((iteration + 1) % window.length == 0 && window_settled(window, run, points, result)) {
+      result.converged = true;
+      break;
+    }
   }
 }
 
 }  // namespace
+
+void check_snake_options(const SnakeOptions& o) {
+  using S = SnakeOptions;
+  if (!S::alpha_range.contains(o.alpha) || !S::beta_range.contains(o.beta) || !S::tau_range.contains(o.tau) ||
+      !S::kappa_range.contains(o.kappa) || !S::exponent_range.contains(o.exponent) ||
+      !S::spacing_range.contains(o.spacing) || !S::max_iterations_range.contains(o.max_iterations) ||
+      !S::resample_every_range.contains(o.resample_every) || !S::max_step_range.contains(o.max_step) ||
+      !S::curvature_cap_range.contains(o.curvature_cap))
+    throw InvalidInputError("snake options out of range (alpha, beta, kappa >= 0; tau, exponent, max_step > 0; spacing > " +
+                            format_number(S::spacing_range.min) + ")");
+}
 
 StripPoint locate_by_walking(const FeatureStrip& strip, const FlatStrip& flat, std::uint32_t start,
                              const Eigen::Vector2d& target) {
@@ -243,271 +498,14 @@ StripPoint locate_by_walking(const FeatureStrip& strip, const FlatStrip& flat, s
 
 SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip, const FlatStrip& flat,
                               const SnakeOptions& o, const Cancellation* cancel) {
-  if (!(o.alpha >= 0) || !(o.beta >= 0) || !(o.tau > 0) || !(o.kappa >= 0) || !(o.exponent > 0) || !(o.spacing > 0.01) ||
-      o.max_iterations < 0 || o.resample_every < 1 || !(o.max_step > 0) || !(o.curvature_cap > 0))
-    throw InvalidInputError("snake options out of range (alpha, beta, kappa >= 0; tau, exponent, max_step > 0; spacing > 0.01)");
+  check_snake_options(o);
   SnakeResult result;
   const double unit = strip.mean_edge_length;  // distances below are in strip edge lengths
-  const std::size_t nv = strip.vertices.size();
-  const std::size_t nt = strip.triangles.size();
-
-  // Potential |C|^p per strip vertex (Eq. 13 with the exponent of Eq. 15).
-  std::vector<double> potential(nv, 0.0);
-  for (std::size_t v = 0; v < nv; ++v) {
-    const double s = std::min(feature_value(pm.curvature, strip.vertices[v], o.feature_sign) / pm.curvature_scale, o.curvature_cap);
-    potential[v] = std::pow(s, o.exponent);
-  }
-  // Gradient of the barycentric interpolant, constant per triangle (scaled coordinates).
-  std::vector<Eigen::Vector2d> triangle_gradient(nt, Eigen::Vector2d::Zero());
-  std::vector<double> triangle_area(nt, 0.0);
-  for (std::size_t t = 0; t < nt; ++t) {
-    if (!flat.triangle_valid[t]) continue;
-    const auto& tri = strip.triangles[t];
-    const Eigen::Vector2d p[3] = {flat.uv[tri[0]] / unit, flat.uv[tri[1]] / unit, flat.uv[tri[2]] / unit};
-    const double twice_area = cross2(p[1] - p[0], p[2] - p[0]);
-    Eigen::Vector2d g = Eigen::Vector2d::Zero();
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector2d e = p[(k + 2) % 3] - p[(k + 1) % 3];  // edge opposite corner k
-      g += potential[tri[k]] * Eigen::Vector2d(-e.y(), e.x()) / twice_area;
-    }
-    triangle_gradient[t] = g;
-    triangle_area[t] = 0.5 * twice_area;
-  }
-  std::vector<Eigen::Vector2d> vertex_gradient;
-  if (o.force == SnakeForce::smooth) {
-    vertex_gradient.assign(nv, Eigen::Vector2d::Zero());
-    std::vector<double> weight(nv, 0.0);
-    for (std::size_t t = 0; t < nt; ++t) {
-      if (!flat.triangle_valid[t]) continue;
-      for (auto v : strip.triangles[t]) {
-        vertex_gradient[v] += triangle_area[t] * triangle_gradient[t];
-        weight[v] += triangle_area[t];
-      }
-    }
-    for (std::size_t v = 0; v < nv; ++v)
-      if (weight[v] > 0) vertex_gradient[v] /= weight[v];
-    zero_gradient_across_sharp_crests(strip, flat, potential, o.sharp_crest_drop, vertex_gradient);
-  }
-  // The smooth force F = sum_k lambda_k g_k is linear in each triangle; its Jacobian
-  // sum_k g_k grad(lambda_k)^T gives the force's restoring stiffness for the normal step.
-  std::vector<Eigen::Matrix2d> force_jacobian;
-  if (o.force == SnakeForce::smooth) {
-    force_jacobian.assign(nt, Eigen::Matrix2d::Zero());
-    for (std::size_t t = 0; t < nt; ++t) {
-      if (!flat.triangle_valid[t]) continue;
-      const auto& tri = strip.triangles[t];
-      const Eigen::Vector2d p[3] = {flat.uv[tri[0]] / unit, flat.uv[tri[1]] / unit, flat.uv[tri[2]] / unit};
-      const double twice_area = cross2(p[1] - p[0], p[2] - p[0]);
-      for (int k = 0; k < 3; ++k) {
-        const Eigen::Vector2d e = p[(k + 2) % 3] - p[(k + 1) % 3];
-        force_jacobian[t] += vertex_gradient[tri[k]] * (Eigen::Vector2d(-e.y(), e.x()) / twice_area).transpose();
-      }
-    }
-  }
-  auto force_at = [&](const StripPoint& p) -> Eigen::Vector2d {
-    if (o.force == SnakeForce::paper) return triangle_gradient[p.triangle];
-    const auto& tri = strip.triangles[p.triangle];
-    return p.barycentric[0] * vertex_gradient[tri[0]] + p.barycentric[1] * vertex_gradient[tri[1]] +
-           p.barycentric[2] * vertex_gradient[tri[2]];
-  };
-
-  // A valid triangle at each line vertex, to start walks from.
-  std::vector<std::int64_t> triangle_at(nv, -1);
-  std::vector<int> corner_at(nv, 0);
-  for (std::size_t t = 0; t < nt; ++t)
-    if (flat.triangle_valid[t])
-      for (int k = 0; k < 3; ++k)
-        if (triangle_at[strip.triangles[t][k]] < 0) triangle_at[strip.triangles[t][k]] = std::int64_t(t), corner_at[strip.triangles[t][k]] = k;
-  auto point_at_vertex = [&](std::uint32_t v) {
-    if (triangle_at[v] < 0) throw GeometryError("the feature strip could not be flattened around a line vertex");
-    StripPoint p;
-    p.triangle = std::uint32_t(triangle_at[v]);
-    p.barycentric = Eigen::Vector3d::Zero();
-    p.barycentric[corner_at[v]] = 1;
-    p.uv = flat.uv[v];
-    return p;
-  };
-
-  // Initial snake: the flattened line resampled at the target spacing.
+  const ForceField force = build_force_field(pm, strip, flat, o, unit);
   const double h = o.spacing * unit;
-  std::vector<StripPoint>& points = result.points;
-  points.push_back(point_at_vertex(strip.line.front()));
-  for (std::size_t i = 0; i + 1 < strip.line.size(); ++i) {
-    const Eigen::Vector2d a = flat.uv[strip.line[i]], b = flat.uv[strip.line[i + 1]];
-    const int pieces = std::max(1, int(std::lround((b - a).norm() / h)));
-    // Restart at each line vertex when it has a valid triangle; otherwise walk on from the
-    // previous sample.
-    StripPoint last = i == 0 || triangle_at[strip.line[i]] < 0 ? points.back() : point_at_vertex(strip.line[i]);
-    for (int k = 1; k < pieces; ++k) {
-      StripPoint p = last;
-      walk(strip, flat, last.triangle, a + (b - a) * (double(k) / pieces), p);
-      points.push_back(p);
-      last = p;
-    }
-    if (i + 2 < strip.line.size()) {
-      // interior line vertices are ordinary, free snake points
-      StripPoint p = last;
-      walk(strip, flat, last.triangle, b, p);
-      points.push_back(p);
-    }
-  }
-  points.push_back(point_at_vertex(strip.line.back()));
-
-  const std::size_t max_points = 4 * points.size() + 16;
-  // Damping of the moves (see the convergence test below).
-  double damping = 1;
-  // Paper: points farther apart than 3h/2 get points between them, points closer than h/2 are
-  // deleted. The normal step then spreads them evenly, as it never moves them along the line.
-  auto resample = [&]() {
-    std::vector<StripPoint> next;
-    next.reserve(points.size() + 8);
-    next.push_back(points.front());
-    for (std::size_t i = 1; i < points.size(); ++i) {
-      const bool last = i + 1 == points.size();
-      const double gap = (points[i].uv - next.back().uv).norm();
-      if (!last && gap < 0.5 * h) continue;  // too close: delete
-      const int pieces = int(std::ceil(gap / h));
-      // Bounded work whatever the options: a line may at most quadruple its initial point count
-      // (an extreme kappa once made it 209,204 points and 51 s; ../shared/data/regressions).
-      const bool room = next.size() + (points.size() - i) + std::size_t(pieces) <= max_points;
-      if (gap > 1.5 * h && room) {             // too far: insert evenly
-        const StripPoint from = next.back();
-        for (int k = 1; k < pieces; ++k) {
-          StripPoint p = from;
-          walk(strip, flat, from.triangle, from.uv + (points[i].uv - from.uv) * (double(k) / pieces), p);
-          next.push_back(p);
-        }
-      }
-      next.push_back(points[i]);
-    }
-    // the last kept interior point may now sit too close to the pinned end
-    if (next.size() > 2 && (next.back().uv - next[next.size() - 2].uv).norm() < 0.5 * h) next.erase(next.end() - 2);
-    points.swap(next);
-    if (o.normal_step) spread_evenly(strip, flat, points, damping);
-  };
-
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> solver;
-  Eigen::SparseMatrix<double> A, M;
-  std::vector<Eigen::Triplet<double>> triplets;
-  std::size_t factored_size = 0;
-  Eigen::VectorXd x, y, rhs_x, rhs_y;
-  std::vector<Eigen::Vector2d> normal, targets;
-  // Convergence is judged on the line's shape over windows of an even number of iterations, so
-  // a point swinging between two states cancels out. A window whose shape change exceeds the
-  // previous one's means the line is not settling (a point held by the strip's border, a force
-  // kink); the step is halved then, so the snake always comes to rest.
-  const int window = 2 * o.resample_every;
-  std::vector<Eigen::Vector2d> window_start;
-  double last_change = HUGE_VAL;
-  for (int iteration = 0; iteration < o.max_iterations; ++iteration) {
-    throw_if_cancelled(cancel);
-    if (iteration % o.resample_every == 0) resample();
-    const std::size_t n = points.size();
-    if (n <= 2) {
-      result.converged = true;
-      break;
-    }
-    if (iteration % window == 0) {
-      window_start.clear();
-      for (const auto& p : points) window_start.push_back(p.uv);
-    }
-    const std::size_t m = n - 2;  // interior unknowns
-    if (Eigen::Index(n) != A.rows()) A = stiffness(n, o.alpha, o.beta);
-    x.resize(Eigen::Index(n));
-    y.resize(Eigen::Index(n));
-    for (std::size_t i = 0; i < n; ++i) x[Eigen::Index(i)] = points[i].uv.x() / unit, y[Eigen::Index(i)] = points[i].uv.y() / unit;
-    targets.assign(n, Eigen::Vector2d::Zero());
-    if (o.normal_step) {
-      // Eq. (15) restricted to moves s_i along each point's normal n_i (N = diag(n_i)):
-      //   (I + tau N'AN + tau K) s = tau N'(kappa F - A v),
-      // K = diag(max(0, -kappa n_i' J n_i)) the smooth force's restoring stiffness (J its
-      // Jacobian), so steep forces do not overshoot. Tangential moves would only slide points
-      // along the line; the pinned ends enter through A v.
-      normal.assign(n, Eigen::Vector2d::Zero());
-      for (std::size_t i = 1; i + 1 < n; ++i) {
-        const Eigen::Vector2d chord(x[Eigen::Index(i + 1)] - x[Eigen::Index(i - 1)], y[Eigen::Index(i + 1)] - y[Eigen::Index(i - 1)]);
-        const double length = chord.norm();
-        if (length > 0) normal[i] = Eigen::Vector2d(-chord.y(), chord.x()) / length;
-      }
-      const Eigen::VectorXd ax = A * x, ay = A * y;
-      rhs_x.resize(Eigen::Index(m));
-      triplets.clear();
-      for (std::size_t i = 1; i + 1 < n; ++i) {
-        const Eigen::Vector2d residual = o.kappa * force_at(points[i]) - Eigen::Vector2d(ax[Eigen::Index(i)], ay[Eigen::Index(i)]);
-        rhs_x[Eigen::Index(i - 1)] = o.tau * normal[i].dot(residual);
-        double stiffness_i = 0;
-        if (!force_jacobian.empty())
-          stiffness_i = std::max(0.0, -o.kappa * normal[i].dot(force_jacobian[points[i].triangle] * normal[i]));
-        triplets.emplace_back(i - 1, i - 1, 1.0 + o.tau * stiffness_i);
-      }
-      for (Eigen::Index k = 0; k < A.outerSize(); ++k)
-        for (Eigen::SparseMatrix<double>::InnerIterator it(A, k); it; ++it) {
-          const auto r = std::size_t(it.row()), c = std::size_t(it.col());
-          if (r == 0 || c == 0 || r + 1 == n || c + 1 == n) continue;
-          triplets.emplace_back(r - 1, c - 1, o.tau * it.value() * normal[r].dot(normal[c]));
-        }
-      M.resize(Eigen::Index(m), Eigen::Index(m));
-      M.setFromTriplets(triplets.begin(), triplets.end());
-      if (n != factored_size) solver.analyzePattern(M);
-      factored_size = n;
-      solver.factorize(M);
-      if (solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
-      const Eigen::VectorXd s = solver.solve(rhs_x);
-      for (std::size_t i = 1; i + 1 < n; ++i) {
-        const double move = std::clamp(damping * s[Eigen::Index(i - 1)], -o.max_step, o.max_step);
-        targets[i] = Eigen::Vector2d(x[Eigen::Index(i)], y[Eigen::Index(i)]) + move * normal[i];
-      }
-    } else {
-      // The paper's Eq. (15) on both coordinates: (I + tau A) v_{k+1} = v_k + tau kappa F, the
-      // force step capped so a point never jumps across a crest in one iteration.
-      if (n != factored_size) {
-        Eigen::SparseMatrix<double> Mi = A.block(1, 1, Eigen::Index(m), Eigen::Index(m)) * o.tau;
-        for (Eigen::Index i = 0; i < Eigen::Index(m); ++i) Mi.coeffRef(i, i) += 1.0;
-        solver.compute(Mi);
-        if (solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
-        factored_size = n;
-      }
-      // Pinned ends enter the right-hand side through A's coupling columns.
-      Eigen::VectorXd ends_x = Eigen::VectorXd::Zero(Eigen::Index(n)), ends_y = Eigen::VectorXd::Zero(Eigen::Index(n));
-      ends_x[0] = x[0], ends_x[Eigen::Index(n - 1)] = x[Eigen::Index(n - 1)];
-      ends_y[0] = y[0], ends_y[Eigen::Index(n - 1)] = y[Eigen::Index(n - 1)];
-      const Eigen::VectorXd coupling_x = A * ends_x, coupling_y = A * ends_y;
-      rhs_x.resize(Eigen::Index(m));
-      rhs_y.resize(Eigen::Index(m));
-      for (std::size_t i = 1; i + 1 < n; ++i) {
-        Eigen::Vector2d step = o.tau * o.kappa * force_at(points[i]);
-        if (o.normal_force_only) {
-          const Eigen::Vector2d chord = points[i + 1].uv - points[i - 1].uv;
-          const double chord_len = chord.norm();
-          if (chord_len > 0) step -= step.dot(chord / chord_len) * (chord / chord_len);
-        }
-        const double len = step.norm();
-        if (len > o.max_step) step *= o.max_step / len;
-        const auto r = Eigen::Index(i - 1);
-        rhs_x[r] = x[Eigen::Index(i)] + step.x() - o.tau * coupling_x[Eigen::Index(i)];
-        rhs_y[r] = y[Eigen::Index(i)] + step.y() - o.tau * coupling_y[Eigen::Index(i)];
-      }
-      const Eigen::VectorXd new_x = solver.solve(rhs_x), new_y = solver.solve(rhs_y);
-      for (std::size_t i = 1; i + 1 < n; ++i) {
-        const Eigen::Vector2d target(new_x[Eigen::Index(i - 1)], new_y[Eigen::Index(i - 1)]);
-        const Eigen::Vector2d now(x[Eigen::Index(i)], y[Eigen::Index(i)]);
-        targets[i] = now + damping * (target - now);
-      }
-    }
-    for (std::size_t i = 1; i + 1 < n; ++i)
-      if (targets[i].allFinite()) move_along_segment(strip, flat, points[i], targets[i] * unit);
-    result.iterations = iteration + 1;
-    if ((iteration + 1) % window == 0) {
-      const double change = mean_distance_to(points, window_start) / unit / double(window);
-      result.last_displacement = change;
-      if (change < o.tolerance) {
-        result.converged = true;
-        break;
-      }
-      if (change > last_change) damping *= 0.5;
-      last_change = change;
-    }
-  }
+  result.points = initial_snake(strip, flat, vertex_starts(strip, flat), h);
+  const SnakeRun run{strip, flat, o, force, unit, h, 4 * result.points.size() + 16};
+  iterate_snake(run, result, cancel);
   return result;
 }
 

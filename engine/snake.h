@@ -15,6 +15,7 @@
 #include "engine/feature_strip.h"
 #include "engine/prepared_mesh.h"
 #include "engine/surface_point.h"
+#include "engine/valid_range.h"
 
 namespace featureline {
 
@@ -77,7 +78,22 @@ struct SnakeOptions {
   /// into bends while resampling deletes them there. false: the paper's Eq. (15) on both
   /// coordinates, explicit in the force.
   bool normal_step = true;
+
+  // What the snake accepts (check_snake_options); api/options_table.cpp's limits lie inside.
+  static constexpr ValidRange alpha_range = at_least(0);
+  static constexpr ValidRange beta_range = at_least(0);
+  static constexpr ValidRange tau_range = above(0);
+  static constexpr ValidRange kappa_range = at_least(0);
+  static constexpr ValidRange exponent_range = above(0);
+  static constexpr ValidRange curvature_cap_range = above(0);
+  static constexpr ValidRange max_step_range = above(0);
+  static constexpr ValidRange max_iterations_range = at_least(0);
+  static constexpr ValidRange spacing_range = above(0.01);
+  static constexpr ValidRange resample_every_range = at_least(1);
 };
+
+/// \throw InvalidInputError when an option is outside its range (SnakeOptions::*_range).
+void check_snake_options(const SnakeOptions& options);
 
 /// A point on the strip, hence on the surface.
 struct StripPoint {

@@ -81,27 +81,23 @@ std::optional<MeshFormat> sniff_obj(std::string_view bytes) {
 
 // ---- format names ---------------------------------------------------------------------
 
-std::string to_string(MeshFormat format) {
-  switch (format) {
-    case MeshFormat::obj: return "obj";
-    case MeshFormat::off: return "off";
-    case MeshFormat::ply: return "ply";
-    case MeshFormat::stl: return "stl";
-    case MeshFormat::gltf: return "gltf";
-    case MeshFormat::glb: return "glb";
-    case MeshFormat::drc: return "drc";
-  }
-  return "unknown";
-}
-
 std::optional<MeshFormat> parse_mesh_format(std::string_view name) {
-  static constexpr MeshFormat all[] = {MeshFormat::obj,  MeshFormat::off, MeshFormat::ply, MeshFormat::stl,
-                                       MeshFormat::gltf, MeshFormat::glb, MeshFormat::drc};
-  for (MeshFormat f : all) {
-    if (detail::iequals(name, to_string(f))) return f;
-  }
+  // EnumNames' table, in any case: file extensions and ?format= come in both.
+  for (const auto& entry : EnumNames<MeshFormat>::entries)
+    if (detail::iequals(name, entry.second)) return entry.first;
   return std::nullopt;
 }
+
+namespace {
+
+// "obj, off, ...": every format's name, for errors.
+std::string supported_formats() {
+  std::string names;
+  for (const auto& entry : EnumNames<MeshFormat>::entries) names += (names.empty() ? "" : ", ") + std::string(entry.second);
+  return names;
+}
+
+}  // namespace
 
 std::optional<MeshFormat> mesh_format_from_path(std::string_view path) {
   const std::size_t slash = path.find_last_of("/\\");
@@ -220,7 +216,7 @@ RawMesh read_mesh_file(const std::string& path, const ReadMeshOptions& options) 
   if (!format) format = sniff_mesh_format(bytes);
   if (!format) {
     throw UnsupportedFormatError("Cannot tell the format of mesh file '" + path +
-                                 "' from its extension or content (supported: obj, off, ply, stl, gltf, glb, drc).");
+                                 "' from its extension or content (supported: " + supported_formats() + ").");
   }
   return read_mesh(bytes, *format, options);
 }

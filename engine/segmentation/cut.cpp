@@ -163,13 +163,18 @@ std::vector<SurfaceLocation> line_locations(const PreparedMesh& mesh, const std:
 }  // namespace
 
 CutEdges cut_along_nearest_vertices(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& lines,
-                                    const SegmentationOptions& options, CutReport& report) {
+                                    const SegmentationOptions& options, CutReport& report, const Cancellation* cancel) {
   CutEdges cuts;
   std::vector<VertexChain> chains;
-  for (std::size_t i = 0; i < lines.size(); ++i) chains.push_back(nearest_vertex_chain(mesh, lines[i], report.gaps[i]));
-  // Open ends join the boundary or another line nearby.
-  for (std::size_t i = 0; i < lines.size(); ++i)
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    throw_if_cancelled(cancel);
+    chains.push_back(nearest_vertex_chain(mesh, lines[i], report.gaps[i]));
+  }
+  // Open ends join the boundary or another line nearby (a path search per end).
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    throw_if_cancelled(cancel);
     if (!lines[i].closed) attach_chain_ends(mesh, lines, chains, i, options.attach_distance, cuts, report);
+  }
   for (std::size_t i = 0; i < lines.size(); ++i)
     for (std::size_t k = 1; k < chains[i].vertices.size(); ++k)
       if (chains[i].linked[k]) cuts.emplace(edge_key(chains[i].vertices[k - 1], chains[i].vertices[k]), int(i));
@@ -177,11 +182,12 @@ CutEdges cut_along_nearest_vertices(const PreparedMesh& mesh, const std::vector<
 }
 
 RemeshedCut cut_along_lines_by_remeshing(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& lines,
-                                         const SegmentationOptions& options, CutReport& report) {
+                                         const SegmentationOptions& options, CutReport& report, const Cancellation* cancel) {
   const double snap = std::max(options.remesh_snap, 1e-6);
   const Tracer tracer(mesh, snap);
   Remesher remesher(mesh, snap);
   for (std::size_t i = 0; i < lines.size(); ++i) {
+    throw_if_cancelled(cancel);
     const auto points = points_with_attached_ends(mesh, lines, i, options.attach_distance, snap, report);
     const auto locations = line_locations(mesh, points, lines[i].closed, snap);
     std::vector<TraceStep> steps;
@@ -190,6 +196,7 @@ RemeshedCut cut_along_lines_by_remeshing(const PreparedMesh& mesh, const std::ve
       report.fallbacks += how == Traced::along_edges;
       report.gaps[i] += how == Traced::gap;
     }
+    throw_if_cancelled(cancel);  // traced; splitting its faces is the other half of a line's work
     auto x = remesher.locate(locations.front());
     for (const auto& step : steps) x = step.gap ? remesher.locate(step.to) : remesher.walk(x, step.to, step.face, int(i));
   }

@@ -13,6 +13,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "engine/cancellation.h"
 #include "engine/internal/geometry.h"
 #include "engine/segmentation.h"
 #include "engine/surface_point.h"
@@ -49,8 +50,9 @@ struct CutReport {
 
 /// Snap mode: the chains of vertices nearest the lines, joined by shortest edge paths; loose ends
 /// joined to the boundary or another chain within attach_distance.
+/// \throw CancelledError once `cancel` is requested (checked per line).
 CutEdges cut_along_nearest_vertices(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& lines,
-                                    const SegmentationOptions& options, CutReport& report);
+                                    const SegmentationOptions& options, CutReport& report, const Cancellation* cancel);
 
 /// The remeshed surface and the new edges along the lines (remesh mode).
 struct RemeshedCut {
@@ -61,8 +63,10 @@ struct RemeshedCut {
 };
 
 /// Remesh mode: new vertices where the lines cross edges, crossed faces split, cut along them.
+/// \throw CancelledError once `cancel` is requested (checked per line, before it is traced and
+/// before its faces are split).
 RemeshedCut cut_along_lines_by_remeshing(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& lines,
-                                         const SegmentationOptions& options, CutReport& report);
+                                         const SegmentationOptions& options, CutReport& report, const Cancellation* cancel);
 
 /// What labelling found, for the warnings.
 struct LabelReport {

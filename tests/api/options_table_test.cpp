@@ -1,11 +1,13 @@
 // The option tables (api/options_table.h): every field round-trips JSON -> options -> JSON,
-// limits give exact errors, enum names come from one table, request parsing names the field.
+// limits give exact errors, enum names come from one table, request parsing names the field,
+// and the limits of options the engine checks are the engine's own ranges (engine/valid_range.h).
 #include <gtest/gtest.h>
 
 #include "api/feature_line_json.h"
 #include "api/options_table.h"
 #include "api/requests.h"
 #include "engine/errors.h"
+#include "engine/segmentation.h"
 #include "tests/support/synthetic_meshes.h"
 
 namespace featureline {
@@ -192,6 +194,140 @@ TEST(Requests, LineRequestsNameTheFieldInErrors) {
   json many = {{"keys", json::array()}};
   for (std::size_t i = 0; i <= RequestLimits::max_keys_per_line; ++i) many["keys"].push_back(i % 2);
   EXPECT_EQ(error(many.dump()), "request.keys has more than " + std::to_string(RequestLimits::max_keys_per_line) + " keys");
+}
+
+// ---- the tables' limits and the engine's ranges: one set of numbers -----------------------------
+
+template <typename Options>
+std::size_t expect_limits_inside_engine_ranges(const OptionTable<Options>& table) {
+  std::size_t checked = 0;
+  for (const auto& field : table) {
+    const OptionSpec& spec = field.spec;
+    if (!spec.engine_range) continue;
+    SCOPED_TRACE(spec.name + " in " + describe(*spec.engine_range));
+    ++checked;
+    const ValidRange& engine = *spec.engine_range;
+    EXPECT_TRUE(engine.contains(spec.minimum)) << spec.minimum;
+    EXPECT_TRUE(engine.contains(spec.maximum)) << spec.maximum;
+    // A closed, finite end of the engine's range is the row's end, not a second number.
+    if (!engine.min_open && std::isfinite(engine.min)) {
+      EXPECT_EQ(spec.minimum, engine.min);
+    }
+    if (!engine.max_open && std::isfinite(engine.max)) {
+      EXPECT_EQ(spec.maximum, engine.max);
+    }
+  }
+  return checked;
+}
+
+const OptionSpec& spec_named(const std::vector<OptionSpec>& specs, const std::string& name) {
+  for (const auto& spec : specs)
+    if (spec.name == name) return spec;
+  throw std::out_of_range(name);
+}
+
+TEST(OptionTable, LimitsAreTheEnginesRanges) {
+  // 12 feature-line rows (rings, min_piece_edges, ten snake options), 3 segmentation, 4 curvature.
+  EXPECT_EQ(expect_limits_inside_engine_ranges(feature_line_option_table()), 12u);
+  EXPECT_EQ(expect_limits_inside_engine_ranges(segmentation_option_table()), 3u);
+  EXPECT_EQ(expect_limits_inside_engine_ranges(curvature_option_table()), 4u);
+  const auto line = option_specs(feature_line_option_table());
+  EXPECT_EQ(spec_named(line, "rings").maximum, StripOptions::max_rings);
+  EXPECT_EQ(spec_named(line, "min_piece_edges").minimum, FeatureLineOptions::min_piece_edges_range.min);
+  EXPECT_EQ(spec_named(line, "snake.iterations").minimum, SnakeOptions::max_iterations_range.min);
+  EXPECT_EQ(spec_named(option_specs(curvature_option_table()), "radius").maximum, CurvatureLimits::max_radius);
+  // A row cannot take an open or unbounded engine end, nor leave the engine's range.
+  EXPECT_THROW(within(above(0)), std::logic_error);
+  EXPECT_THROW(within(at_least(0)), std::logic_error);
+  EXPECT_THROW(within(closed_range(0, 8), kEngineEnd, 9), std::logic_error);
+  EXPECT_THROW(within(above(0.01), 0.01, 10), std::logic_error);
+  EXPECT_EQ(within(above(0.01), 0.25, 10).minimum, 0.25);
+  EXPECT_EQ(describe(half_open_range(0, 0.25)), "[0, 0.25)");
+}
+
+// One options struct per numeric row at its table minimum and one at its maximum, the other
+// fields at their defaults; `label` names the row and the value.
+template <typename Options>
+std::vector<std::pair<std::string, Options>> options_at_table_limits(const OptionTable<Options>& table) {
+  std::vector<std::pair<std::string, Options>> out;
+  for (const auto& field : table) {
+    const OptionSpec& spec = field.spec;
+    if (spec.kind != OptionKind::number && spec.kind != OptionKind::integer) continue;
+    for (double value : {spec.minimum, spec.maximum}) {
+      Options options;
+      field.write(options, check_option_value(spec, json(value), spec.name));
+      out.emplace_back(spec.name + " = " + format_number(value), options);
+    }
+  }
+  return out;
+}
+
+// One options struct per closed, finite end of an engine range, just outside it.
+template <typename Options>
+std::vector<std::pair<std::string, Options>> options_outside_engine_ranges(const OptionTable<Options>& table) {
+  std::vector<std::pair<std::string, Options>> out;
+  for (const auto& field : table) {
+    const OptionSpec& spec = field.spec;
+    if (!spec.engine_range) continue;
+    const ValidRange& r = *spec.engine_range;
+    const double step = spec.kind == OptionKind::integer ? 1 : 1e-9;
+    std::vector<double> outside;
+    if (!r.min_open && std::isfinite(r.min)) outside.push_back(r.min - step);
+    if (!r.max_open && std::isfinite(r.max)) outside.push_back(r.max + step);
+    if (r.min_open) outside.push_back(r.min);
+    if (r.max_open) outside.push_back(r.max);  // infinity too, where only finite numbers pass
+    for (double value : outside) {
+      Options options;
+      field.write(options, spec.kind == OptionKind::integer ? json(static_cast<long long>(value)) : json(value));
+      out.emplace_back(spec.name + " = " + format_number(value), options);
+    }
+  }
+  return out;
+}
+
+TEST(OptionTable, EngineAcceptsWhatTheTableAcceptsAndRefusesWhatItsRangeRefuses) {
+  for (const auto& [what, options] : options_at_table_limits(feature_line_option_table()))
+    EXPECT_NO_THROW(check_feature_line_options(options)) << what;
+  for (const auto& [what, options] : options_at_table_limits(segmentation_option_table()))
+    EXPECT_NO_THROW(check_segmentation_options(options)) << what;
+  for (const auto& [what, options] : options_at_table_limits(curvature_option_table()))
+    EXPECT_NO_THROW(check_curvature_options(options)) << what;
+  // The engine's checks use those same ranges: one step outside is refused.
+  const auto line = options_outside_engine_ranges(feature_line_option_table());
+  for (const auto& [what, options] : line) EXPECT_THROW(check_feature_line_options(options), InvalidInputError) << what;
+  const auto segmentation = options_outside_engine_ranges(segmentation_option_table());
+  for (const auto& [what, options] : segmentation) EXPECT_THROW(check_segmentation_options(options), InvalidInputError) << what;
+  const auto curvature = options_outside_engine_ranges(curvature_option_table());
+  for (const auto& [what, options] : curvature) EXPECT_THROW(check_curvature_options(options), InvalidInputError) << what;
+  // Two ends of rings, one of each other line option; both ends of the three segmentation
+  // ranges; radius, passes and tolerance at both ends, crease_angle above its maximum.
+  EXPECT_EQ(line.size(), 13u);
+  EXPECT_EQ(segmentation.size(), 6u);
+  EXPECT_EQ(curvature.size(), 7u);
+}
+
+// The whole engine, not only its checks: a line on a small ridge field runs with every numeric
+// row at each of its table limits, and the mesh prepares with every curvature row at its limits.
+TEST(OptionTable, LinesAndPreparationRunAtEveryTableLimit) {
+  const auto field = testing::make_ridge_field(21, 0.2, 3, 0.3, 0.2, 0.3);
+  const auto mesh = prepare_mesh(field.mesh);
+  const auto keys = testing::keys_on_crest(field, {-0.8, 0.0, 0.8});
+  for (const auto& [what, options] : options_at_table_limits(feature_line_option_table())) {
+    // At its minimum of one edge max_line_edges refuses any longer line: that is its job.
+    if (what == "max_line_edges = 1") continue;
+    FeatureLineRequest request;
+    request.keys = keys;
+    request.options = options;
+    EXPECT_NO_THROW({
+      const auto line = detect_feature_line(*mesh, request);
+      EXPECT_GE(line.refined.size(), 2u) << what;
+    }) << what;
+  }
+  for (const auto& [what, options] : options_at_table_limits(curvature_option_table())) {
+    PrepareOptions prepare;
+    prepare.curvature = options;
+    EXPECT_NO_THROW(prepare_mesh(field.mesh, prepare)) << what;
+  }
 }
 
 }  // namespace

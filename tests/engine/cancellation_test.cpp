@@ -8,6 +8,7 @@
 #include "engine/errors.h"
 #include "engine/feature_line.h"
 #include "engine/segmentation.h"
+#include "engine/segmentation/stages.h"
 #include "tests/support/synthetic_meshes.h"
 
 namespace featureline {
@@ -48,6 +49,29 @@ TEST(Cancellation, StopsSegmentation) {
     options.mode = mode;
     EXPECT_THROW(segment_mesh(*mesh, {line}, options, &cancelled), CancelledError) << int(mode);
   }
+}
+
+// The cutting stages check the cancellation themselves, per line, not only segment_mesh between
+// stages: a long batch of lines stops inside the cut instead of finishing it.
+TEST(Cancellation, StopsEachCuttingStage) {
+  const auto field = make_ridge_field(31, 0.0, 2, 0.3, 0.25, 0.0);
+  const auto mesh = prepare_mesh(field.mesh);
+  FeatureLineRequest request;
+  request.keys = {std::uint32_t(15 * 31), std::uint32_t(15 * 31 + 30)};
+  const std::vector<FeatureLineResult> lines(3, detect_feature_line(*mesh, request));
+  const SegmentationOptions options;
+  Cancellation cancelled;
+  cancelled.cancel();
+  const Cancellation idle;
+  CutReport report;
+  report.gaps.assign(lines.size(), 0);
+  EXPECT_THROW(cut_along_nearest_vertices(*mesh, lines, options, report, &cancelled), CancelledError);
+  EXPECT_THROW(cut_along_lines_by_remeshing(*mesh, lines, options, report, &cancelled), CancelledError);
+  // Not requested: both cut the line's edges (the same line three times: its edges once each).
+  EXPECT_FALSE(cut_along_nearest_vertices(*mesh, lines, options, report, &idle).empty());
+  const RemeshedCut remeshed = cut_along_lines_by_remeshing(*mesh, lines, options, report, &idle);
+  EXPECT_FALSE(remeshed.cuts.empty());
+  EXPECT_GT(remeshed.triangles.size(), mesh->triangles.size());
 }
 
 }  // namespace

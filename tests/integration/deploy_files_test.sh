@@ -9,12 +9,8 @@
 #   SERVER=build/server/featureline-server bash tests/integration/deploy_files_test.sh
 set -u
 
-HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
-ROOT="$(cd "$HERE/../.." && pwd)"
-cd "$ROOT" || exit 1
-SERVER=${SERVER:-$ROOT/build/server/featureline-server}
 # shellcheck source=lib.sh
-source "$HERE/lib.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"  # HERE, ROOT (the working directory), SERVER, SHARED, MESHES, VR, VG, JOBS
 for tool in python3 dpkg ldd; do command -v "$tool" >/dev/null || { echo "FAIL $tool is missing"; exit 1; }; done
 [ -x /usr/sbin/nginx ] || { echo "FAIL nginx is not installed (scripts/setup.sh)"; exit 1; }
 python3 -c 'import yaml' 2>/dev/null || { echo "FAIL python3-yaml is not installed (scripts/setup.sh)"; exit 1; }

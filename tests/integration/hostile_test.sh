@@ -11,16 +11,9 @@
 # and "N passed, N failed"; exits 1 on any failure.
 set -u
 
-HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
-ROOT="$(cd "$HERE/../.." && pwd)"
-cd "$ROOT" || exit 1
-SERVER=${SERVER:-$ROOT/build/server/featureline-server}
-VR="$HERE/validate_response.mjs"
-VG="$HERE/validate_gltf.mjs"
-JOBS=${JOBS:-$(nproc 2>/dev/null || echo 2)}
-CORPUS="$ROOT/tests/fuzz/corpus"
 # shellcheck source=lib.sh
-source "$HERE/lib.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"  # HERE, ROOT (the working directory), SERVER, SHARED, MESHES, VR, VG, JOBS
+CORPUS="$ROOT/tests/fuzz/corpus"
 
 for tool in curl jq node perl timeout; do
   command -v "$tool" >/dev/null || { echo "FAIL $tool is not installed (run scripts/setup.sh)"; exit 1; }

@@ -1,4 +1,10 @@
-# Helpers for the server's integration tests (sourced by server_test.sh).
+# Helpers for the server's integration tests (sourced first by every *_test.sh that runs the
+# server: source "$(dirname "${BASH_SOURCE[0]}")/lib.sh").
+#
+# Sourcing it also sets where things are, and makes the repository the working directory:
+#   HERE (this folder), ROOT (the repository), SERVER (default build/server/featureline-server),
+#   SHARED (default ../shared beside the repository), MESHES ($SHARED/data/meshes), VR and VG
+#   (the response and glTF validators), JOBS (parallel validator runs, default nproc).
 #
 #   check NAME COMMAND...      runs COMMAND; prints "ok   NAME" or "FAIL NAME"
 #   pass NAME / fail NAME [DETAIL...]
@@ -23,6 +29,16 @@
 #   finish                     prints the summary; the exit status is 1 when anything failed
 #
 # Needs: bash 4, curl, jq, node (with node_modules from scripts/setup.sh).
+
+HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+ROOT="$(cd "$HERE/../.." && pwd)"
+cd "$ROOT" || exit 1
+SERVER=${SERVER:-$ROOT/build/server/featureline-server}
+SHARED=${SHARED:-$ROOT/../shared}
+MESHES="$SHARED/data/meshes"
+VR="$HERE/validate_response.mjs"
+VG="$HERE/validate_gltf.mjs"
+JOBS=${JOBS:-$(nproc 2>/dev/null || echo 2)}
 
 PASSED=0
 FAILED=0

@@ -10,16 +10,8 @@
 # Prints "ok   NAME" / "FAIL NAME" lines and "N passed, N failed"; exits 1 on any failure.
 set -u
 
-HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
-ROOT="$(cd "$HERE/../.." && pwd)"
-cd "$ROOT" || exit 1
-SERVER=${SERVER:-$ROOT/build/server/featureline-server}
-SHARED=${SHARED:-$ROOT/../shared}
-MESHES="$SHARED/data/meshes"
-VR="$HERE/validate_response.mjs"
-JOBS=${JOBS:-$(nproc 2>/dev/null || echo 2)}
 # shellcheck source=lib.sh
-source "$HERE/lib.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"  # HERE, ROOT (the working directory), SERVER, SHARED, MESHES, VR, VG, JOBS
 
 for tool in curl jq node ss; do command -v "$tool" >/dev/null || { echo "FAIL $tool is not installed"; exit 1; }; done
 [ -x "$SERVER" ] || { echo "FAIL no server binary at $SERVER"; exit 1; }
