@@ -11,10 +11,10 @@
 
 #include "engine/errors.h"
 #include "engine/internal/geometry.h"
+#include "engine/internal/stopwatch.h"
 
 namespace featureline {
 namespace {
-
 
 Eigen::Vector3d to_eigen(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
 
@@ -389,7 +389,9 @@ CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Ei
     throw InvalidInputError("crease angle must be at most 179 degrees (0: automatic, negative: none)");
   CurvatureField field;
   const std::size_t n = positions.size();
+  auto clock = StageClock::now();
   field.mean = compute_mean_curvature(mesh, normals);
+  field.timings.mean_ms = lap_ms(clock);
   field.k_max = field.mean;
   field.k_min = field.mean;
   const std::vector<double> local = local_edge_lengths(positions, adjacency);
@@ -411,6 +413,7 @@ CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Ei
   for (std::uint32_t v = 0; v < n; ++v)
     for (auto k = adjacency.offsets[v]; k < adjacency.offsets[v + 1]; ++k)
       if (field.crease[k] != 0) on_crease[v] = 1;
+  field.timings.creases_ms = lap_ms(clock);
   if (options.method == CurvatureMethod::jet) {
     // Noise: the median residual of fits over two edge lengths (flat and smooth parts fit
     // almost exactly, so what remains is the noise; creases are too few to move a median),
@@ -421,11 +424,13 @@ CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Ei
         fit_all(positions, normals, adjacency, on_crease, local, kProbeRadius, stride, field.mean, field, cancel);
     residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return r < 0; }), residual.end());
     field.noise = median_of(residual);
+    field.timings.noise_ms = lap_ms(clock);
       // Wider neighbourhoods average noise away (the variance of a fitted curvature falls as
     // radius^-6 at a fixed density) but blur features; grow the radius with the noise only.
     field.radius = options.radius > 0 ? options.radius : std::clamp(2 + 100 * field.noise, kProbeRadius, 6.0);
     if (field.radius != kProbeRadius || stride != 1)
       fit_all(positions, normals, adjacency, on_crease, local, field.radius, 1, field.mean, field, cancel);
+    field.timings.jet_ms = lap_ms(clock);
   }
   if (options.smoothing_passes < 0) {
     field.smoothing_passes =
@@ -437,6 +442,7 @@ CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Ei
     }
     field.smoothing_passes = options.smoothing_passes;
   }
+  field.timings.smoothing_ms = lap_ms(clock);
   return field;
 }
 

@@ -58,6 +58,15 @@ struct CurvatureLimits {
   static constexpr double max_crease_angle = 179;
 };
 
+/// Wall time of each part of the curvature stage, milliseconds (bench_pipeline prints them).
+struct CurvatureTimings {
+  double mean_ms = 0;       ///< cotangent mean curvature
+  double creases_ms = 0;    ///< dihedral angles and crease marking
+  double noise_ms = 0;      ///< the probe fits that estimate the noise
+  double jet_ms = 0;        ///< the jet fit of every vertex at the chosen radius
+  double smoothing_ms = 0;  ///< smoothing passes and the roughness measurements deciding them
+};
+
 struct CurvatureField {
   std::vector<double> mean;   ///< signed mean curvature (cotangent), positive on convex parts
   /// Signed principal curvatures, k_max >= k_min, positive where the surface is convex along
@@ -72,6 +81,7 @@ struct CurvatureField {
   int smoothing_passes = 0; ///< Laplacian passes applied to k_max and k_min
   double crease_angle = 0;  ///< degrees; 0 when creases are off
   std::size_t crease_edges = 0;
+  CurvatureTimings timings;
 };
 
 /// Adjacency in compressed rows: neighbours of v are neighbors[offsets[v] .. offsets[v+1]).

@@ -13,6 +13,7 @@
 
 #include "engine/errors.h"
 #include "engine/internal/geometry.h"
+#include "engine/internal/stopwatch.h"
 
 namespace featureline {
 namespace {
@@ -208,7 +209,7 @@ void measure_boundary_and_box(PreparedMesh& pm) {
   stats.bbox_max = {hi.x(), hi.y(), hi.z()};
 }
 
-// The face tables and the nearest-vertex index every request reads (built once here).
+// The face tables every request reads (built once here).
 void build_face_tables(PreparedMesh& pm) {
   const std::size_t n = pm.positions.size();
   pm.vertex_faces = build_vertex_faces(pm.triangles, n);
@@ -217,7 +218,6 @@ void build_face_tables(PreparedMesh& pm) {
   for (std::uint32_t f = 0; f < pm.triangles.size(); ++f)
     for (int k = 0; k < 3; ++k)
       if (pm.face_neighbors[f][k] == kNoIndex) pm.boundary_vertex[pm.triangles[f][k]] = pm.boundary_vertex[pm.triangles[f][(k + 1) % 3]] = 1;
-  pm.vertex_index = VertexIndex(pm.positions, pm.component);
 }
 
 // Curvature range and percentiles of the feature value; the curvature scale.
@@ -307,6 +307,7 @@ std::size_t PreparedMesh::memory_bytes() const {
 
 std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options, const Cancellation* cancel) {
   const auto start = Clock::now();
+  auto clock = start;
   // OpenMesh prints add_face failures ("patch re-linking failed") to std::cerr; we handle and
   // report every such face ourselves, so its stream is switched off once for the process.
   static std::once_flag quiet;
@@ -327,15 +328,22 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   stats.faces = mesh.n_faces();
   pm.positions.resize(n);
   for (auto v : mesh.vertices()) pm.positions[v.idx()] = to_eigen(mesh.point(v));
+  pm.timings.triangles_ms = lap_ms(clock);
   build_vertex_adjacency(pm);
   label_components(pm);
   measure_boundary_and_box(pm);
+  pm.timings.adjacency_ms = lap_ms(clock);
   build_face_tables(pm);
+  pm.timings.tables_ms = lap_ms(clock);
+  pm.vertex_index = VertexIndex(pm.positions, pm.component);
+  pm.timings.index_ms = lap_ms(clock);
 
   throw_if_cancelled(cancel);
   pm.vertex_normals = compute_vertex_normals(mesh);
+  pm.timings.normals_ms = lap_ms(clock);
   pm.curvature = compute_curvature_field(mesh, pm.positions, pm.vertex_normals, {pm.neighbor_offsets, pm.neighbors},
                                          options.curvature, cancel);
+  pm.timings.curvature_ms = lap_ms(clock);
   stats.curvature_method = to_string(options.curvature.method);
   stats.noise = pm.curvature.noise;
   stats.curvature_radius = pm.curvature.radius;
