@@ -11,6 +11,7 @@
 // dihedral angle and treated as features in their own right.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -20,7 +21,6 @@
 
 #include "engine/cancellation.h"
 #include "engine/enum_names.h"
-#include "engine/tri_mesh.h"
 
 namespace featureline {
 
@@ -90,17 +90,30 @@ struct AdjacencyView {
   const std::vector<std::uint32_t>& neighbors;
 };
 
+/// The mesh as the curvature stage reads it: the prepared mesh's own tables (engine/prepared_mesh.h),
+/// flat arrays walked in order, with no halfedge structure beside them.
+struct MeshTablesView {
+  const std::vector<Eigen::Vector3d>& positions;
+  /// Corner vertex ids of each face, counter-clockwise seen from outside; no edge has more than
+  /// two faces, and two faces on an edge run through it in opposite directions.
+  const std::vector<std::array<std::uint32_t, 3>>& triangles;
+  /// The face across edge k = (t[k], t[k+1]) of each face, UINT32_MAX on the boundary.
+  const std::vector<std::array<std::uint32_t, 3>>& face_neighbors;
+  const std::vector<char>& boundary_vertex;  ///< per vertex: on an edge with one face
+  AdjacencyView adjacency;
+};
+
 /// \throw InvalidInputError for options out of range; CancelledError once `cancel` is requested
 ///        (checked every 4096 vertices of the fits and every smoothing pass).
-CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& positions,
-                                       const std::vector<Eigen::Vector3d>& normals, const AdjacencyView& adjacency,
+CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::vector<Eigen::Vector3d>& normals,
                                        const CurvatureOptions& options = {}, const Cancellation* cancel = nullptr);
 
 /// The signed mean curvature of every vertex by the cotangent formula (exposed for tests).
-std::vector<double> compute_mean_curvature(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& normals);
+std::vector<double> compute_mean_curvature(const MeshTablesView& mesh, const std::vector<Eigen::Vector3d>& normals);
 
 /// Angle-weighted unit vertex normals.
-std::vector<Eigen::Vector3d> compute_vertex_normals(const TriMesh& mesh);
+std::vector<Eigen::Vector3d> compute_vertex_normals(const std::vector<Eigen::Vector3d>& positions,
+                                                    const std::vector<std::array<std::uint32_t, 3>>& triangles);
 
 /// Feature value of a vertex for lines of a given sign: +1 ridges (k_max, negative clipped to
 /// 0), -1 valleys (-k_min, clipped), 0 either (the larger |k|). In curvature units.

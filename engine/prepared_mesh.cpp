@@ -339,10 +339,10 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   pm.timings.index_ms = lap_ms(clock);
 
   throw_if_cancelled(cancel);
-  pm.vertex_normals = compute_vertex_normals(mesh);
+  pm.vertex_normals = compute_vertex_normals(pm.positions, pm.triangles);
   pm.timings.normals_ms = lap_ms(clock);
-  pm.curvature = compute_curvature_field(mesh, pm.positions, pm.vertex_normals, {pm.neighbor_offsets, pm.neighbors},
-                                         options.curvature, cancel);
+  const MeshTablesView tables{pm.positions, pm.triangles, pm.face_neighbors, pm.boundary_vertex, {pm.neighbor_offsets, pm.neighbors}};
+  pm.curvature = compute_curvature_field(tables, pm.vertex_normals, options.curvature, cancel);
   pm.timings.curvature_ms = lap_ms(clock);
   stats.curvature_method = to_string(options.curvature.method);
   stats.noise = pm.curvature.noise;
