@@ -45,52 +45,25 @@ struct JetFit {
   bool ok = false;
 };
 
-// A vertex's neighbourhood for one fit, with what the fit reads of each point kept beside its
-// id (offsets and squared distances from the centre, already computed by the search), and the
-// search's visited stamps. One per thread, reused for every vertex: no allocation per fit.
-struct Neighbourhood {
-  std::vector<std::uint32_t> ids;
-  std::vector<Eigen::Vector3d> offsets;  ///< P[id] - P[v]
-  std::vector<double> squared_distances, weights;
-  std::vector<std::uint32_t> stamp;  ///< per vertex: the generation that last visited it
-  std::uint32_t generation = 0;
-
-  explicit Neighbourhood(std::size_t n_vertices) : stamp(n_vertices, 0) {}
-  void clear() {
-    ids.clear();
-    offsets.clear();
-    squared_distances.clear();
-  }
-  void add(std::uint32_t id, const Eigen::Vector3d& offset, double squared_distance) {
-    ids.push_back(id);
-    offsets.push_back(offset);
-    squared_distances.push_back(squared_distance);
-  }
-  std::size_t size() const { return ids.size(); }
-};
-
 // Gathers the vertices within `radius` of v reachable through vertices that are themselves
 // within it (a breadth-first search over edges, so the other side of a thin part is not
 // mixed in). The search does not continue past crease vertices (other than v), so a smooth
 // patch is fitted on its own: the centre of a CAD cap fan sees its flat cap and rim, not the
-// side beyond the rim.
+// side beyond the rim. `stamp` marks visited vertices with `generation`.
 void gather(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, const std::vector<char>& on_crease,
-            std::uint32_t v, double radius, Neighbourhood& hood) {
-  const std::uint32_t generation = ++hood.generation;
-  hood.clear();
-  hood.add(v, P[v] - P[v], 0);
-  hood.stamp[v] = generation;
+            std::uint32_t v, double radius, std::vector<std::uint32_t>& stamp, std::uint32_t generation,
+            std::vector<std::uint32_t>& out) {
+  out.assign(1, v);
+  stamp[v] = generation;
   const double r2 = radius * radius;
-  for (std::size_t head = 0; head < hood.ids.size(); ++head) {
-    const auto a = hood.ids[head];
+  for (std::size_t head = 0; head < out.size(); ++head) {
+    const auto a = out[head];
     if (head > 0 && on_crease[a]) continue;
     for (auto k = adj.offsets[a]; k < adj.offsets[a + 1]; ++k) {
       const auto w = adj.neighbors[k];
-      if (hood.stamp[w] == generation) continue;
-      hood.stamp[w] = generation;
-      const Eigen::Vector3d offset = P[w] - P[v];
-      const double d2 = offset.squaredNorm();
-      if (d2 <= r2) hood.add(w, offset, d2);
+      if (stamp[w] == generation) continue;
+      stamp[w] = generation;
+      if ((P[w] - P[v]).squaredNorm() <= r2) out.push_back(w);
     }
   }
 }
@@ -99,7 +72,8 @@ void gather(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, con
 // the neighbourhood, in a frame whose z axis is the neighbourhood's mean normal, coordinates
 // scaled by the radius for conditioning. The principal curvatures are the eigenvalues of the
 // graph's shape operator I^-1 II at the origin, so a tilted frame is corrected by c1, c2.
-JetFit fit_jet(const std::vector<Eigen::Vector3d>& N, std::uint32_t v, Neighbourhood& hood, double radius) {
+JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N, std::uint32_t v,
+               const std::vector<std::uint32_t>& hood, double radius) {
   JetFit fit;
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
   const double inv_r = 1.0 / radius;
@@ -107,34 +81,36 @@ JetFit fit_jet(const std::vector<Eigen::Vector3d>& N, std::uint32_t v, Neighbour
   // its smaller effective neighbourhood put the refined line on noisy ridges of 24k-245k
   // triangles 30-85% further from the crest (bench_accuracy; slightly closer on 5k).
   // One exponential per point (the frame and the fit use the same weights).
-  const std::size_t size = hood.size();
-  hood.weights.resize(size);
-  for (std::size_t i = 0; i < size; ++i) {
-    hood.weights[i] = std::exp(-2 * hood.squared_distances[i] * inv_r * inv_r);
-    n += hood.weights[i] * N[hood.ids[i]];
+  thread_local std::vector<double> weights;
+  weights.resize(hood.size());
+  for (std::size_t i = 0; i < hood.size(); ++i) {
+    weights[i] = std::exp(-2 * (P[hood[i]] - P[v]).squaredNorm() * inv_r * inv_r);
+    n += weights[i] * N[hood[i]];
   }
   if (!(n.norm() > 1e-12)) n = N[v];
   if (!(n.norm() > 1e-12)) return fit;
   n.normalize();
   const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
-  // The normal equations' lower triangle only (all LDLT reads), each entry formed as
-  // (weight row_i) row_j.
   Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
   double weight_sum = 0, hh = 0;
-  for (std::size_t i = 0; i < size; ++i) {
-    const Eigen::Vector3d x = hood.offsets[i] * inv_r;
+  for (std::size_t i = 0; i < hood.size(); ++i) {
+    const Eigen::Vector3d x = (P[hood[i]] - P[v]) * inv_r;
     const double u = x.dot(t1), s = x.dot(t2), h = x.dot(n);
-    const double weight = hood.weights[i];
-    const double row[6] = {1, u, s, u * u, u * s, s * s};
-    for (int r = 0; r < 6; ++r) {
-      const double weighted = weight * row[r];
-      for (int c = 0; c <= r; ++c) A(r, c) += weighted * row[c];
-    }
-    const double wh = weight * h;
-    for (int r = 0; r < 6; ++r) b[r] += wh * row[r];
+    const double weight = weights[i];
+    Eigen::Matrix<double, 6, 1> row;
+    row << 1, u, s, u * u, u * s, s * s;
+    // The lower triangle only (all LDLT reads; mirrored below), each entry (weight row_i) row_j.
+    const Eigen::Matrix<double, 6, 1> weighted = weight * row;
+    A.col(0) += weighted * row[0];
+    A.col(1).tail<5>() += weighted.tail<5>() * row[1];
+    A.col(2).tail<4>() += weighted.tail<4>() * row[2];
+    A.col(3).tail<3>() += weighted.tail<3>() * row[3];
+    A.col(4).tail<2>() += weighted.tail<2>() * row[4];
+    A(5, 5) += weighted[5] * row[5];
+    b += weight * h * row;
     weight_sum += weight;
-    hh += wh * h;
+    hh += weight * h * h;
   }
   A.triangularView<Eigen::StrictlyUpper>() = A.transpose();
   // A neighbourhood on a line or too few points leaves the quadric undetermined.
@@ -160,11 +136,12 @@ JetFit fit_jet(const std::vector<Eigen::Vector3d>& N, std::uint32_t v, Neighbour
   return fit;
 }
 
-std::vector<double> local_edge_lengths(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj) {
-  std::vector<double> local(P.size(), 0.0);
-  for (std::size_t v = 0; v < P.size(); ++v) {
+std::vector<double> local_edge_lengths(const AdjacencyView& adj) {
+  const std::size_t n = adj.offsets.size() - 1;
+  std::vector<double> local(n, 0.0);
+  for (std::size_t v = 0; v < n; ++v) {
     const auto begin = adj.offsets[v], end = adj.offsets[v + 1];
-    for (auto k = begin; k < end; ++k) local[v] += (P[adj.neighbors[k]] - P[v]).norm();
+    for (auto k = begin; k < end; ++k) local[v] += adj.edge_lengths[k];
     if (end > begin) local[v] /= double(end - begin);
   }
   return local;
@@ -180,7 +157,8 @@ std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::ve
   const std::size_t n = P.size();
   std::vector<double> residual(n, -1.0);
   parallel_ranges(n, [&](std::size_t begin, std::size_t end) {
-    Neighbourhood hood(n);
+    std::vector<std::uint32_t> stamp(n, 0), hood;
+    std::uint32_t generation = 0;
     for (std::size_t v = begin; v < end; ++v) {
       // Worker threads must not throw: they stop, and the caller throws below.
       if ((v & 4095) == 0 && cancel != nullptr && cancel->requested()) break;
@@ -191,8 +169,8 @@ std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::ve
       double r = radius * local[v];
       // Too few points (coarse or skinny neighbourhoods) widen the radius a few times.
       for (int attempt = 0; attempt < 4 && !fit.ok; ++attempt, r *= 1.5) {
-        gather(P, adj, on_crease, std::uint32_t(v), r, hood);
-        if (hood.size() >= 8) fit = fit_jet(N, std::uint32_t(v), hood, r);
+        gather(P, adj, on_crease, std::uint32_t(v), r, stamp, ++generation, hood);
+        if (hood.size() >= 8) fit = fit_jet(P, N, std::uint32_t(v), hood, r);
       }
       if (!fit.ok) continue;
       field.k_max[v] = fit.k_max;
@@ -455,7 +433,7 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
   field.timings.mean_ms = lap_ms(clock);
   field.k_max = field.mean;
   field.k_min = field.mean;
-  const std::vector<double> local = local_edge_lengths(positions, adjacency);
+  const std::vector<double> local = local_edge_lengths(adjacency);
   // Creases: above 30 degrees, and well above the dihedral angles the noise makes on its own.
   if (options.crease_angle >= 0) {
     const EdgeAngles angles = dihedral_angles(mesh);

@@ -88,6 +88,7 @@ struct CurvatureField {
 struct AdjacencyView {
   const std::vector<std::uint32_t>& offsets;
   const std::vector<std::uint32_t>& neighbors;
+  const std::vector<double>& edge_lengths;  ///< parallel to `neighbors`: |P[neighbor] - P[v]|
 };
 
 /// The mesh as the curvature stage reads it: the prepared mesh's own tables (engine/prepared_mesh.h),
