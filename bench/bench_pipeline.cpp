@@ -2,10 +2,20 @@
 // Table 1 (Dragon, 33,927 triangles, 1.6 GHz Pentium IV: initial 0.013 s,
 // parameterisation 0.067 s, snake 0.261 s).
 //
-// usage: bench_pipeline [--lines N] [MESH ...]   (default: the four meshes of the README)
+// Then the preparation's own stages (medians over --prepare-runs preparations of each mesh), so
+// a change to prepare_mesh shows where its time went.
+//
+// usage: bench_pipeline [--lines N] [--prepare-runs R] [--dump-curvature DIR] [MESH ...]
+//   (default meshes: the four of the README)
+//   --lines N            lines per mesh (default 40; 0: preparation only)
+//   --prepare-runs R     preparations per mesh for the breakdown (default 3)
+//   --dump-curvature DIR writes DIR/<mesh>.curvature: the field's scalars, then per vertex mean,
+//                        k_max, k_min (%.17g), then the crease flags; two dumps compared tell
+//                        whether a change to the curvature stage changed its results
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <fstream>
 #include <random>
 #include <string>
 #include <unordered_set>
@@ -27,14 +37,60 @@ double median(std::vector<double> v) {
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
+// Medians of the preparation stages over `runs` preparations of `raw`.
+struct PrepareBreakdown {
+  std::vector<double> total, triangles, adjacency, tables, index, normals, curvature, mean, creases, noise, jet, smoothing;
+};
+
+void add_timings(const PreparedMesh& mesh, PrepareBreakdown& b) {
+  const auto& t = mesh.timings;
+  const auto& c = mesh.curvature.timings;
+  b.total.push_back(mesh.prepare_ms);
+  b.triangles.push_back(t.triangles_ms);
+  b.adjacency.push_back(t.adjacency_ms);
+  b.tables.push_back(t.tables_ms);
+  b.index.push_back(t.index_ms);
+  b.normals.push_back(t.normals_ms);
+  b.curvature.push_back(t.curvature_ms);
+  b.mean.push_back(c.mean_ms);
+  b.creases.push_back(c.creases_ms);
+  b.noise.push_back(c.noise_ms);
+  b.jet.push_back(c.jet_ms);
+  b.smoothing.push_back(c.smoothing_ms);
+}
+
+void print_breakdown(const std::string& name, const PrepareBreakdown& b) {
+  std::printf("%-20s %8.1f | %7.1f %7.1f %7.1f %7.1f %7.1f | %7.1f: %6.1f %7.1f %6.1f %7.1f %7.1f\n", name.c_str(),
+              median(b.total), median(b.triangles), median(b.adjacency), median(b.tables), median(b.index),
+              median(b.normals), median(b.curvature), median(b.mean), median(b.creases), median(b.noise), median(b.jet),
+              median(b.smoothing));
+}
+
+void dump_curvature(const PreparedMesh& mesh, const std::string& path) {
+  std::ofstream out(path);
+  const CurvatureField& f = mesh.curvature;
+  char line[128];
+  std::snprintf(line, sizeof line, "noise %.17g radius %.17g passes %d crease_angle %.17g crease_edges %zu\n", f.noise,
+                f.radius, f.smoothing_passes, f.crease_angle, f.crease_edges);
+  out << line;
+  for (std::size_t v = 0; v < f.k_max.size(); ++v) {
+    std::snprintf(line, sizeof line, "%.17g %.17g %.17g\n", f.mean[v], f.k_max[v], f.k_min[v]);
+    out << line;
+  }
+  for (const auto c : f.crease) out << int(c) << '\n';
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  int lines = 40;
+  int lines = 40, prepare_runs = 3;
+  std::string dump_dir;
   std::vector<std::string> meshes;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--lines" && i + 1 < argc) lines = std::max(1, std::atoi(argv[++i]));
+    if (arg == "--lines" && i + 1 < argc) lines = std::max(0, std::atoi(argv[++i]));
+    else if (arg == "--prepare-runs" && i + 1 < argc) prepare_runs = std::max(1, std::atoi(argv[++i]));
+    else if (arg == "--dump-curvature" && i + 1 < argc) dump_dir = argv[++i];
     else meshes.push_back(arg);
   }
   if (meshes.empty())
@@ -49,12 +105,19 @@ int main(int argc, char** argv) {
   double smallest_total = 0, largest_total = 0;
   std::size_t smallest_faces = SIZE_MAX, largest_faces = 0;
   int status = 0;
+  std::vector<std::pair<std::string, PrepareBreakdown>> breakdowns;
   for (const auto& path : meshes) {
     try {
       auto t0 = Clock::now();
       RawMesh raw = read_mesh_file(path);
       const double load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      const std::string name = path.substr(path.find_last_of('/') + 1);
+      PrepareBreakdown breakdown;
+      for (int run = 1; run < prepare_runs; ++run) add_timings(*prepare_mesh(raw), breakdown);
       const auto mesh = prepare_mesh(std::move(raw));
+      add_timings(*mesh, breakdown);
+      breakdowns.emplace_back(name, breakdown);
+      if (!dump_dir.empty()) dump_curvature(*mesh, dump_dir + "/" + name + ".curvature");
       std::mt19937_64 rng(20041101);
       std::vector<double> initial, strip, flatten, snake, total, iterations, per_piece;
       std::size_t fallbacks = 0;
@@ -75,7 +138,6 @@ int main(int argc, char** argv) {
       std::vector<double> sorted_total = total;
       std::sort(sorted_total.begin(), sorted_total.end());
       const double p90 = sorted_total.empty() ? 0 : sorted_total[std::size_t(0.9 * double(sorted_total.size() - 1))];
-      const std::string name = path.substr(path.find_last_of('/') + 1);
       std::printf("%-20s %9zu %8.1f %8.1f | %5zu %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f | %6.0f %5.0f %6zu\n", name.c_str(),
                   mesh->statistics.faces, load_ms, mesh->prepare_ms, total.size(), median(initial), median(strip),
                   median(flatten), median(snake), median(total), p90, median(iterations), median(per_piece), fallbacks);
@@ -86,8 +148,14 @@ int main(int argc, char** argv) {
       status = 1;
     }
   }
-  if (largest_faces > smallest_faces && smallest_total > 0)
+  if (largest_faces > smallest_faces && smallest_total > 0 && lines > 0)
     std::printf("\nmedian total per line, largest / smallest mesh (%zu / %zu triangles): %.2fx (target: within 1.5x)\n",
                 largest_faces, smallest_faces, largest_total / smallest_total);
+  std::printf("\nPreparation, ms (medians of %d preparations per mesh; curvature = mean + creases + noise + jet + "
+              "smoothing):\n\n",
+              prepare_runs);
+  std::printf("%-20s %8s | %7s %7s %7s %7s %7s | %7s: %6s %7s %6s %7s %7s\n", "mesh", "prepare", "triangl", "adjacen",
+              "tables", "index", "normals", "curvatu", "mean", "creases", "noise", "jet", "smooth");
+  for (const auto& [name, breakdown] : breakdowns) print_breakdown(name, breakdown);
   return status;
 }

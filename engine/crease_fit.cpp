@@ -82,14 +82,15 @@ SurfacePoint nearest_surface_point_near(const PreparedMesh& mesh, std::uint32_t 
   SurfacePoint best = surface_point_at_vertex(mesh, v);
   double best_distance = (best.position - x).squaredNorm();
   auto try_faces_of = [&](std::uint32_t u) {
-    for (const auto f : mesh.mesh.vf_range(TriMesh::VertexHandle(int(u)))) {
-      const auto& t = mesh.triangles[std::size_t(f.idx())];
+    for (auto it = mesh.vertex_faces.begin(u); it != mesh.vertex_faces.end(u); ++it) {
+      const std::uint32_t f = *it;
+      const auto& t = mesh.triangles[f];
       const auto w = nearest_on_triangle(x, mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]);
       const Eigen::Vector3d p = w[0] * mesh.positions[t[0]] + w[1] * mesh.positions[t[1]] + w[2] * mesh.positions[t[2]];
       const double distance = (p - x).squaredNorm();
       if (distance < best_distance) {
         best_distance = distance;
-        best = {p, std::uint32_t(f.idx()), w};
+        best = {p, f, w};
       }
     }
   };

@@ -11,12 +11,10 @@
 
 #include "engine/errors.h"
 #include "engine/internal/geometry.h"
+#include "engine/internal/stopwatch.h"
 
 namespace featureline {
 namespace {
-
-
-Eigen::Vector3d to_eigen(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
 
 double median_of(std::vector<double> values) {
   if (values.empty()) return 0;
@@ -56,16 +54,23 @@ void gather(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, con
             std::uint32_t v, double radius, std::vector<std::uint32_t>& stamp, std::uint32_t generation,
             std::vector<std::uint32_t>& out) {
   out.assign(1, v);
-  stamp[v] = generation;
+  // Raw pointers: the stores to `stamp` and `out` would otherwise make the compiler reload
+  // every vector's data pointer in the inner loop.
+  std::uint32_t* const visited = stamp.data();
+  const std::uint32_t* const offsets = adj.offsets.data();
+  const std::uint32_t* const neighbors = adj.neighbors.data();
+  const Eigen::Vector3d* const points = P.data();
+  const Eigen::Vector3d centre = P[v];
+  visited[v] = generation;
   const double r2 = radius * radius;
   for (std::size_t head = 0; head < out.size(); ++head) {
     const auto a = out[head];
     if (head > 0 && on_crease[a]) continue;
-    for (auto k = adj.offsets[a]; k < adj.offsets[a + 1]; ++k) {
-      const auto w = adj.neighbors[k];
-      if (stamp[w] == generation) continue;
-      stamp[w] = generation;
-      if ((P[w] - P[v]).squaredNorm() <= r2) out.push_back(w);
+    for (auto k = offsets[a], end = offsets[a + 1]; k < end; ++k) {
+      const auto w = neighbors[k];
+      if (visited[w] == generation) continue;
+      visited[w] = generation;
+      if ((points[w] - centre).squaredNorm() <= r2) out.push_back(w);
     }
   }
 }
@@ -100,16 +105,16 @@ JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::V
     const Eigen::Vector3d x = (P[hood[i]] - P[v]) * inv_r;
     const double u = x.dot(t1), s = x.dot(t2), h = x.dot(n);
     const double weight = weights[i];
+    // Set coefficient by coefficient: perf put a sixth of the fit's samples on Eigen's comma initializer.
     Eigen::Matrix<double, 6, 1> row;
-    row << 1, u, s, u * u, u * s, s * s;
+    row[0] = 1, row[1] = u, row[2] = s, row[3] = u * u, row[4] = u * s, row[5] = s * s;
     A.noalias() += (weight * row) * row.transpose();
     b += weight * h * row;
     weight_sum += weight;
     hh += weight * h * h;
   }
-  const Eigen::Matrix<double, 6, 6>& full = A;
   // A neighbourhood on a line or too few points leaves the quadric undetermined.
-  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(full);
+  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(A);
   const auto d = ldlt.vectorD();
   if (ldlt.info() != Eigen::Success || !(d.minCoeff() > 1e-9 * d.maxCoeff())) return fit;
   const Eigen::Matrix<double, 6, 1> c = ldlt.solve(b);
@@ -131,11 +136,12 @@ JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::V
   return fit;
 }
 
-std::vector<double> local_edge_lengths(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj) {
-  std::vector<double> local(P.size(), 0.0);
-  for (std::size_t v = 0; v < P.size(); ++v) {
+std::vector<double> local_edge_lengths(const AdjacencyView& adj) {
+  const std::size_t n = adj.offsets.size() - 1;
+  std::vector<double> local(n, 0.0);
+  for (std::size_t v = 0; v < n; ++v) {
     const auto begin = adj.offsets[v], end = adj.offsets[v + 1];
-    for (auto k = begin; k < end; ++k) local[v] += (P[adj.neighbors[k]] - P[v]).norm();
+    for (auto k = begin; k < end; ++k) local[v] += adj.edge_lengths[k];
     if (end > begin) local[v] /= double(end - begin);
   }
   return local;
@@ -183,33 +189,48 @@ struct EdgeAngles {
   std::vector<std::int32_t> corner_a, corner_b;
 };
 
-EdgeAngles dihedral_angles(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj) {
+// The adjacency entry of edge v -> w (in v's row), or UINT32_MAX.
+std::uint32_t entry_of(const AdjacencyView& adj, std::uint32_t v, std::uint32_t w) {
+  for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k)
+    if (adj.neighbors[k] == w) return k;
+  return kNoIndex;
+}
+
+// Entry v -> w is visited once, from the face that runs through the edge from v to w (its far
+// corner is a), with b the far corner of the face across. Both directions of an edge are
+// measured from their own side, as every later test reads them.
+EdgeAngles dihedral_angles(const MeshTablesView& mesh) {
+  const auto& P = mesh.positions;
+  const AdjacencyView& adj = mesh.adjacency;
   EdgeAngles out;
   out.angle.assign(adj.neighbors.size(), 0.0);
   out.corner_a.assign(adj.neighbors.size(), -1);
   out.corner_b.assign(adj.neighbors.size(), -1);
-  for (std::uint32_t v = 0; v < P.size(); ++v)
-    for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
-      const auto w = adj.neighbors[k];
-      const auto he = mesh.find_halfedge(TriMesh::VertexHandle(int(v)), TriMesh::VertexHandle(int(w)));
-      if (!he.is_valid() || mesh.is_boundary(mesh.edge_handle(he))) continue;
-      const auto a = mesh.to_vertex_handle(mesh.next_halfedge_handle(he)).idx();
-      const auto b = mesh.to_vertex_handle(mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(he))).idx();
+  for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f) {
+    const auto& t = mesh.triangles[f];
+    for (int side = 0; side < 3; ++side) {
+      const std::uint32_t across = mesh.face_neighbors[f][side];
+      if (across == kNoIndex) continue;
+      const auto v = t[side], w = t[(side + 1) % 3], a = t[(side + 2) % 3];
+      const auto& u = mesh.triangles[across];
+      const auto b = u[0] != v && u[0] != w ? u[0] : u[1] != v && u[1] != w ? u[1] : u[2];
+      const auto k = entry_of(adj, v, w);
+      if (k == kNoIndex) continue;
       const Eigen::Vector3d e = P[w] - P[v];
-      const Eigen::Vector3d na = e.cross(P[std::size_t(a)] - P[v]);
-      const Eigen::Vector3d nb = (P[std::size_t(b)] - P[v]).cross(e);
+      const Eigen::Vector3d na = e.cross(P[a] - P[v]);
+      const Eigen::Vector3d nb = (P[b] - P[v]).cross(e);
       if (!(na.norm() > 0) || !(nb.norm() > 0)) continue;
       out.angle[k] = angle_between(na, nb);
-      out.corner_a[k] = a;
-      out.corner_b[k] = b;
+      out.corner_a[k] = std::int32_t(a);
+      out.corner_b[k] = std::int32_t(b);
     }
+  }
   return out;
 }
 
 double angle_of(const AdjacencyView& adj, const EdgeAngles& angles, std::uint32_t v, std::uint32_t w) {
-  for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k)
-    if (adj.neighbors[k] == w) return angles.angle[k];
-  return 0;
+  const auto k = entry_of(adj, v, w);
+  return k == kNoIndex ? 0 : angles.angle[k];
 }
 
 // An edge is a crease when its dihedral angle exceeds the threshold and stands out from its
@@ -229,7 +250,7 @@ void mark_creases(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& ad
     const Eigen::Vector3d na = (P[w] - P[v]).cross(P[a] - P[v]);
     return (P[b] - P[v]).dot(na) < 0 ? 1 : -1;
   };
-  std::vector<std::size_t> sharp_but_not_standing_out;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> sharp_but_not_standing_out;  // (v, entry)
   for (std::uint32_t v = 0; v < P.size(); ++v)
     for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
       const double angle = angles.angle[k];
@@ -240,7 +261,7 @@ void mark_creases(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& ad
                                      angle_of(adj, angles, v, b), angle_of(adj, angles, b, w)};
       std::sort(wings.begin(), wings.end());
       if (wings[2] >= 0.5 * angle) {
-        sharp_but_not_standing_out.push_back(k);
+        sharp_but_not_standing_out.emplace_back(v, k);
         continue;
       }
       field.crease[k] = sign_of(v, k);
@@ -255,11 +276,8 @@ void mark_creases(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& ad
   for (std::uint32_t v = 0; v < P.size(); ++v)
     for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k)
       if (field.crease[k] != 0) ++crease_degree[v], end_sign[v] = field.crease[k];
-  std::vector<std::size_t> owner(adj.neighbors.size());
-  for (std::uint32_t v = 0; v < P.size(); ++v)
-    for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) owner[k] = v;
-  for (const auto k : sharp_but_not_standing_out) {
-    const auto v = std::uint32_t(owner[k]), w = adj.neighbors[k];
+  for (const auto& [v, k] : sharp_but_not_standing_out) {
+    const auto w = adj.neighbors[k];
     const auto sign = sign_of(v, k);
     const bool continues_v = crease_degree[v] == 1 && end_sign[v] == sign;
     const bool continues_w = crease_degree[w] == 1 && end_sign[w] == sign;
@@ -270,52 +288,73 @@ void mark_creases(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& ad
       if (field.crease[k] != 0 && v < adj.neighbors[k]) ++field.crease_edges;
 }
 
-// One pass of the principal curvatures' umbrella average, half weight on the vertex itself.
-// Values are not averaged across crease edges: the two sides of a crease are different
-// surfaces, and blurring one into the other moves the field's crest off the crease.
-void smooth_once(CurvatureField& field, const AdjacencyView& adjacency) {
+// The principal curvatures while they are smoothed: k_max and k_min side by side per vertex,
+// and each vertex's neighbours across smooth edges (in adjacency order, so every sum adds the
+// same terms in the same order as over the adjacency). Values are not averaged across crease
+// edges: the two sides of a crease are different surfaces, and blurring one into the other
+// moves the field's crest off the crease.
+struct SmoothedField {
+  std::vector<std::uint32_t> offsets, neighbors;
+  std::vector<std::array<double, 2>> values, next;  ///< (k_max, k_min) per vertex; next: a pass's output
+};
+
+SmoothedField start_smoothing(const CurvatureField& field, const AdjacencyView& adjacency) {
+  SmoothedField s;
   const std::size_t n = field.k_max.size();
-  // Reused between passes; referenced (not named) inside the workers, which have their own.
-  thread_local std::vector<double> buffer_max, buffer_min;
-  std::vector<double>& next_max = buffer_max;
-  std::vector<double>& next_min = buffer_min;
-  next_max.resize(n);
-  next_min.resize(n);
-  parallel_ranges(n, [&](std::size_t first, std::size_t last) {
+  s.offsets.resize(n + 1);
+  s.neighbors.reserve(adjacency.neighbors.size());
+  s.values.resize(n);
+  s.next.resize(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    s.offsets[v] = std::uint32_t(s.neighbors.size());
+    for (auto k = adjacency.offsets[v]; k < adjacency.offsets[v + 1]; ++k)
+      if (field.crease[k] == 0) s.neighbors.push_back(adjacency.neighbors[k]);
+    s.values[v] = {field.k_max[v], field.k_min[v]};
+  }
+  s.offsets[n] = std::uint32_t(s.neighbors.size());
+  return s;
+}
+
+void finish_smoothing(const SmoothedField& s, CurvatureField& field) {
+  for (std::size_t v = 0; v < s.values.size(); ++v) field.k_max[v] = s.values[v][0], field.k_min[v] = s.values[v][1];
+}
+
+// One pass of the umbrella average, half weight on the vertex itself.
+void smooth_once(SmoothedField& s) {
+  parallel_ranges(s.values.size(), [&](std::size_t first, std::size_t last) {
     for (std::size_t v = first; v < last; ++v) {
+      const auto begin = s.offsets[v], end = s.offsets[v + 1];
+      if (begin == end) {
+        s.next[v] = s.values[v];
+        continue;
+      }
       double sum_max = 0, sum_min = 0;
-      int count = 0;
-      for (auto k = adjacency.offsets[v]; k < adjacency.offsets[v + 1]; ++k)
-        if (field.crease[k] == 0) {
-          const auto w = adjacency.neighbors[k];
-          sum_max += field.k_max[w], sum_min += field.k_min[w], ++count;
-        }
-      next_max[v] = count > 0 ? 0.5 * (field.k_max[v] + sum_max / count) : field.k_max[v];
-      next_min[v] = count > 0 ? 0.5 * (field.k_min[v] + sum_min / count) : field.k_min[v];
+      for (auto k = begin; k < end; ++k) {
+        const auto& w = s.values[s.neighbors[k]];
+        sum_max += w[0], sum_min += w[1];
+      }
+      const int count = int(end - begin);
+      s.next[v] = {0.5 * (s.values[v][0] + sum_max / count), 0.5 * (s.values[v][1] + sum_min / count)};
     }
   });
-  field.k_max.swap(next_max);
-  field.k_min.swap(next_min);
+  s.values.swap(s.next);
 }
 
 // How rough the principal curvature fields are for their size: the median difference between
 // a vertex's value and its neighbours' mean, over the 90th percentile of the values. Noise is
 // rough at every scale; a smooth field's differences shrink with the square of the edge length.
-double relative_roughness(const CurvatureField& field, const AdjacencyView& adjacency) {
-  const std::size_t n = field.k_max.size();
+double relative_roughness(const SmoothedField& s) {
+  const std::size_t n = s.values.size();
   const std::size_t stride = std::max<std::size_t>(1, n / 20000);
   std::vector<double> difference, magnitude;
   for (std::uint32_t v = 0; v < n; v += std::uint32_t(stride)) {
-    const auto begin = adjacency.offsets[v], end = adjacency.offsets[v + 1];
+    const auto begin = s.offsets[v], end = s.offsets[v + 1];
     if (begin == end) continue;
-    for (const auto* values : {&field.k_max, &field.k_min}) {
+    for (int which = 0; which < 2; ++which) {
       double sum = 0;
-      int count = 0;
-      for (auto k = begin; k < end; ++k)
-        if (field.crease[k] == 0) sum += (*values)[adjacency.neighbors[k]], ++count;
-      if (count == 0) continue;
-      difference.push_back(std::abs((*values)[v] - sum / count));
-      magnitude.push_back(std::abs((*values)[v]));
+      for (auto k = begin; k < end; ++k) sum += s.values[s.neighbors[k]][which];
+      difference.push_back(std::abs(s.values[v][which] - sum / int(end - begin)));
+      magnitude.push_back(std::abs(s.values[v][which]));
     }
   }
   if (magnitude.empty()) return 0;
@@ -332,19 +371,18 @@ double relative_roughness(const CurvatureField& field, const AdjacencyView& adja
 // how finely the mesh samples its features: on a 245k-triangle ridge at 10-20% noise about
 // 64-100 passes (the line's error 0.07-0.10 edge lengths instead of 0.36-0.88 unsmoothed), on a
 // 5k-triangle one or a clean mesh 0-2 (bench_accuracy).
-int smooth_until_noise_is_gone(CurvatureField& field, const AdjacencyView& adjacency, double tolerance, int max_passes,
-                               const Cancellation* cancel) {
+int smooth_until_noise_is_gone(SmoothedField& s, double tolerance, int max_passes, const Cancellation* cancel) {
   int passes = 0;
-  double roughness = relative_roughness(field, adjacency);
+  double roughness = relative_roughness(s);
+  std::vector<std::array<double, 2>> before;
   while (passes < max_passes && roughness > 0) {
     throw_if_cancelled(cancel);
     const int run = std::min(std::max(passes, 1), max_passes - passes);
-    std::vector<double> k_max = field.k_max, k_min = field.k_min;
-    for (int pass = 0; pass < run; ++pass) smooth_once(field, adjacency);
-    const double smoothed = relative_roughness(field, adjacency);
+    before = s.values;
+    for (int pass = 0; pass < run; ++pass) smooth_once(s);
+    const double smoothed = relative_roughness(s);
     if (smoothed > tolerance * roughness) {
-      field.k_max.swap(k_max);  // this run only blurred: keep the field as it was before it
-      field.k_min.swap(k_min);
+      s.values.swap(before);  // this run only blurred: keep the field as it was before it
       break;
     }
     passes += run;
@@ -389,19 +427,22 @@ void check_curvature_options(const CurvatureOptions& options) {
                             " degrees (0: automatic, negative: none)");
 }
 
-CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& positions,
-                                       const std::vector<Eigen::Vector3d>& normals, const AdjacencyView& adjacency,
+CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::vector<Eigen::Vector3d>& normals,
                                        const CurvatureOptions& options, const Cancellation* cancel) {
   check_curvature_options(options);
   CurvatureField field;
+  const auto& positions = mesh.positions;
+  const AdjacencyView& adjacency = mesh.adjacency;
   const std::size_t n = positions.size();
+  auto clock = StageClock::now();
   field.mean = compute_mean_curvature(mesh, normals);
+  field.timings.mean_ms = lap_ms(clock);
   field.k_max = field.mean;
   field.k_min = field.mean;
-  const std::vector<double> local = local_edge_lengths(positions, adjacency);
+  const std::vector<double> local = local_edge_lengths(adjacency);
   // Creases: above 30 degrees, and well above the dihedral angles the noise makes on its own.
   if (options.crease_angle >= 0) {
-    const EdgeAngles angles = dihedral_angles(mesh, positions, adjacency);
+    const EdgeAngles angles = dihedral_angles(mesh);
     std::vector<double> interior;
     for (std::size_t k = 0; k < angles.angle.size(); ++k)
       if (angles.corner_a[k] >= 0) interior.push_back(angles.angle[k]);
@@ -417,6 +458,7 @@ CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Ei
   for (std::uint32_t v = 0; v < n; ++v)
     for (auto k = adjacency.offsets[v]; k < adjacency.offsets[v + 1]; ++k)
       if (field.crease[k] != 0) on_crease[v] = 1;
+  field.timings.creases_ms = lap_ms(clock);
   if (options.method == CurvatureMethod::jet) {
     // Noise: the median residual of fits over two edge lengths (flat and smooth parts fit
     // almost exactly, so what remains is the noise; creases are too few to move a median),
@@ -427,35 +469,35 @@ CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Ei
         fit_all(positions, normals, adjacency, on_crease, local, kProbeRadius, stride, field.mean, field, cancel);
     residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return r < 0; }), residual.end());
     field.noise = median_of(residual);
+    field.timings.noise_ms = lap_ms(clock);
       // Wider neighbourhoods average noise away (the variance of a fitted curvature falls as
     // radius^-6 at a fixed density) but blur features; grow the radius with the noise only.
     field.radius = options.radius > 0 ? options.radius : std::clamp(2 + 100 * field.noise, kProbeRadius, 6.0);
     if (field.radius != kProbeRadius || stride != 1)
       fit_all(positions, normals, adjacency, on_crease, local, field.radius, 1, field.mean, field, cancel);
+    field.timings.jet_ms = lap_ms(clock);
   }
+  SmoothedField smoothed = start_smoothing(field, adjacency);
   if (options.smoothing_passes < 0) {
-    field.smoothing_passes =
-        smooth_until_noise_is_gone(field, adjacency, options.smoothing_tolerance, blur_limited_passes(positions, local), cancel);
+    field.smoothing_passes = smooth_until_noise_is_gone(smoothed, options.smoothing_tolerance,
+                                                        blur_limited_passes(positions, local), cancel);
   } else {
     for (int pass = 0; pass < options.smoothing_passes; ++pass) {
       throw_if_cancelled(cancel);
-      smooth_once(field, adjacency);
+      smooth_once(smoothed);
     }
     field.smoothing_passes = options.smoothing_passes;
   }
+  finish_smoothing(smoothed, field);
+  field.timings.smoothing_ms = lap_ms(clock);
   return field;
 }
 
-std::vector<Eigen::Vector3d> compute_vertex_normals(const TriMesh& mesh) {
-  std::vector<Eigen::Vector3d> normals(mesh.n_vertices(), Eigen::Vector3d::Zero());
-  for (auto f : mesh.faces()) {
-    Eigen::Vector3d p[3];
-    int idx[3];
-    int k = 0;
-    for (auto v : mesh.fv_range(f)) {
-      idx[k] = v.idx();
-      p[k++] = to_eigen(mesh.point(v));
-    }
+std::vector<Eigen::Vector3d> compute_vertex_normals(const std::vector<Eigen::Vector3d>& positions,
+                                                    const std::vector<std::array<std::uint32_t, 3>>& triangles) {
+  std::vector<Eigen::Vector3d> normals(positions.size(), Eigen::Vector3d::Zero());
+  for (const auto& t : triangles) {
+    const Eigen::Vector3d p[3] = {positions[t[0]], positions[t[1]], positions[t[2]]};
     Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]);
     const double len = n.norm();
     if (!(len > 0)) continue;
@@ -463,7 +505,7 @@ std::vector<Eigen::Vector3d> compute_vertex_normals(const TriMesh& mesh) {
     for (int i = 0; i < 3; ++i) {
       const Eigen::Vector3d a = p[(i + 1) % 3] - p[i], b = p[(i + 2) % 3] - p[i];
       const double angle = angle_between(a, b);
-      normals[idx[i]] += angle * n;
+      normals[t[i]] += angle * n;
     }
   }
   for (auto& n : normals) {
@@ -473,21 +515,15 @@ std::vector<Eigen::Vector3d> compute_vertex_normals(const TriMesh& mesh) {
   return normals;
 }
 
-std::vector<double> compute_mean_curvature(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& normals) {
-  const std::size_t n = mesh.n_vertices();
+std::vector<double> compute_mean_curvature(const MeshTablesView& mesh, const std::vector<Eigen::Vector3d>& normals) {
+  const std::size_t n = mesh.positions.size();
   std::vector<Eigen::Vector3d> laplace(n, Eigen::Vector3d::Zero());
   std::vector<double> area(n, 0.0);
   // Meyer, Desbrun, Schroeder, Barr 2003: K(x_i) = 1/(2 A_mixed) sum_j (cot a_ij + cot b_ij)(x_i - x_j),
   // and K = 2 H n. The mixed area uses Voronoi areas on non-obtuse triangles and the
   // area/2, area/4 split on obtuse ones, so the areas tile the surface.
-  for (auto f : mesh.faces()) {
-    int idx[3];
-    Eigen::Vector3d p[3];
-    int k = 0;
-    for (auto v : mesh.fv_range(f)) {
-      idx[k] = v.idx();
-      p[k++] = to_eigen(mesh.point(v));
-    }
+  for (const auto& idx : mesh.triangles) {
+    const Eigen::Vector3d p[3] = {mesh.positions[idx[0]], mesh.positions[idx[1]], mesh.positions[idx[2]]};
     const double double_area = (p[1] - p[0]).cross(p[2] - p[0]).norm();
     if (!(double_area > 1e-300)) continue;  // zero-area triangles carry no curvature information
     double cot[3];
@@ -515,21 +551,23 @@ std::vector<double> compute_mean_curvature(const TriMesh& mesh, const std::vecto
       }
     }
   }
+  // On the boundary (an edge with one face; isolated vertices too) the cotangent Laplacian is
+  // incomplete; borrow from interior neighbours.
+  const AdjacencyView& adj = mesh.adjacency;
   std::vector<double> curvature(n, 0.0);
   std::vector<char> on_boundary(n, 0);
-  for (auto v : mesh.vertices()) {
-    on_boundary[v.idx()] = mesh.is_boundary(v) || !mesh.is_manifold(v);
-    if (area[v.idx()] > 0) curvature[v.idx()] = 0.25 * laplace[v.idx()].dot(normals[v.idx()]) / area[v.idx()];
+  for (std::size_t v = 0; v < n; ++v) {
+    on_boundary[v] = mesh.boundary_vertex[v] || adj.offsets[v] == adj.offsets[v + 1];
+    if (area[v] > 0) curvature[v] = 0.25 * laplace[v].dot(normals[v]) / area[v];
   }
-  // The cotangent Laplacian is incomplete at the boundary; borrow from interior neighbours.
   std::vector<double> boundary_value(n, 0.0);
-  for (auto v : mesh.vertices()) {
-    if (!on_boundary[v.idx()]) continue;
+  for (std::size_t v = 0; v < n; ++v) {
+    if (!on_boundary[v]) continue;
     double sum = 0;
     int count = 0;
-    for (auto w : mesh.vv_range(v))
-      if (!on_boundary[w.idx()]) sum += curvature[w.idx()], ++count;
-    boundary_value[v.idx()] = count > 0 ? sum / count : 0.0;
+    for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k)
+      if (!on_boundary[adj.neighbors[k]]) sum += curvature[adj.neighbors[k]], ++count;
+    boundary_value[v] = count > 0 ? sum / count : 0.0;
   }
   for (std::size_t v = 0; v < n; ++v)
     if (on_boundary[v]) curvature[v] = boundary_value[v];

@@ -11,6 +11,7 @@
 // dihedral angle and treated as features in their own right.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -20,7 +21,6 @@
 
 #include "engine/cancellation.h"
 #include "engine/enum_names.h"
-#include "engine/tri_mesh.h"
 #include "engine/valid_range.h"
 
 namespace featureline {
@@ -67,6 +67,15 @@ struct CurvatureLimits {
 /// \throw InvalidInputError when an option is outside its range (CurvatureLimits::*_range).
 void check_curvature_options(const CurvatureOptions& options);
 
+/// Wall time of each part of the curvature stage, milliseconds (bench_pipeline prints them).
+struct CurvatureTimings {
+  double mean_ms = 0;       ///< cotangent mean curvature
+  double creases_ms = 0;    ///< dihedral angles and crease marking
+  double noise_ms = 0;      ///< the probe fits that estimate the noise
+  double jet_ms = 0;        ///< the jet fit of every vertex at the chosen radius
+  double smoothing_ms = 0;  ///< smoothing passes and the roughness measurements deciding them
+};
+
 struct CurvatureField {
   std::vector<double> mean;   ///< signed mean curvature (cotangent), positive on convex parts
   /// Signed principal curvatures, k_max >= k_min, positive where the surface is convex along
@@ -81,25 +90,40 @@ struct CurvatureField {
   int smoothing_passes = 0; ///< Laplacian passes applied to k_max and k_min
   double crease_angle = 0;  ///< degrees; 0 when creases are off
   std::size_t crease_edges = 0;
+  CurvatureTimings timings;
 };
 
 /// Adjacency in compressed rows: neighbours of v are neighbors[offsets[v] .. offsets[v+1]).
 struct AdjacencyView {
   const std::vector<std::uint32_t>& offsets;
   const std::vector<std::uint32_t>& neighbors;
+  const std::vector<double>& edge_lengths;  ///< parallel to `neighbors`: |P[neighbor] - P[v]|
+};
+
+/// The mesh as the curvature stage reads it: the prepared mesh's own tables (engine/prepared_mesh.h),
+/// flat arrays walked in order, with no halfedge structure beside them.
+struct MeshTablesView {
+  const std::vector<Eigen::Vector3d>& positions;
+  /// Corner vertex ids of each face, counter-clockwise seen from outside; no edge has more than
+  /// two faces, and two faces on an edge run through it in opposite directions.
+  const std::vector<std::array<std::uint32_t, 3>>& triangles;
+  /// The face across edge k = (t[k], t[k+1]) of each face, UINT32_MAX on the boundary.
+  const std::vector<std::array<std::uint32_t, 3>>& face_neighbors;
+  const std::vector<char>& boundary_vertex;  ///< per vertex: on an edge with one face
+  AdjacencyView adjacency;
 };
 
 /// \throw InvalidInputError for options out of range; CancelledError once `cancel` is requested
 ///        (checked every 4096 vertices of the fits and every smoothing pass).
-CurvatureField compute_curvature_field(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& positions,
-                                       const std::vector<Eigen::Vector3d>& normals, const AdjacencyView& adjacency,
+CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::vector<Eigen::Vector3d>& normals,
                                        const CurvatureOptions& options = {}, const Cancellation* cancel = nullptr);
 
 /// The signed mean curvature of every vertex by the cotangent formula (exposed for tests).
-std::vector<double> compute_mean_curvature(const TriMesh& mesh, const std::vector<Eigen::Vector3d>& normals);
+std::vector<double> compute_mean_curvature(const MeshTablesView& mesh, const std::vector<Eigen::Vector3d>& normals);
 
 /// Angle-weighted unit vertex normals.
-std::vector<Eigen::Vector3d> compute_vertex_normals(const TriMesh& mesh);
+std::vector<Eigen::Vector3d> compute_vertex_normals(const std::vector<Eigen::Vector3d>& positions,
+                                                    const std::vector<std::array<std::uint32_t, 3>>& triangles);
 
 /// Feature value of a vertex for lines of a given sign: +1 ridges (k_max, negative clipped to
 /// 0), -1 valleys (-k_min, clipped), 0 either (the larger |k|). In curvature units.

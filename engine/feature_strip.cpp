@@ -18,23 +18,37 @@ double corner_angle(const Eigen::Vector3d& at, const Eigen::Vector3d& a, const E
   return angle_between(a - at, b - at);
 }
 
-// Sum of corner angles at `center` swept counter-clockwise from the halfedge to `from` until
-// the halfedge to `until` (the faces on the left of a path arriving from `until`... see caller).
+// The vertex after `next` counter-clockwise around `center`: the third corner of the face that
+// runs from center to next, or kNoIndex where the edge center-next is on the boundary (seen
+// from that side).
+std::uint32_t next_around(const PreparedMesh& pm, std::uint32_t center, std::uint32_t next) {
+  for (auto it = pm.vertex_faces.begin(center); it != pm.vertex_faces.end(center); ++it) {
+    const auto& t = pm.triangles[*it];
+    const int c = corner_of(t, center);
+    if (t[(c + 1) % 3] == next) return t[(c + 2) % 3];
+  }
+  return kNoIndex;
+}
+
+bool adjacent(const PreparedMesh& pm, std::uint32_t v, std::uint32_t w) {
+  for (auto k = pm.neighbor_offsets[v]; k < pm.neighbor_offsets[v + 1]; ++k)
+    if (pm.neighbors[k] == w) return true;
+  return false;
+}
+
+// Sum of corner angles at `center` swept counter-clockwise from the edge to `from` until the
+// edge to `until` (the faces on the left of a path arriving from `until`... see caller).
 // Returns a negative value when a boundary interrupts the sweep.
 double swept_angle(const PreparedMesh& pm, std::uint32_t center, std::uint32_t from, std::uint32_t until) {
-  const TriMesh& mesh = pm.mesh;
-  const TriMesh::VertexHandle c{int(center)}, a{int(from)}, b{int(until)};
-  auto h = mesh.find_halfedge(c, a);
-  const auto target = mesh.find_halfedge(c, b);
-  if (!h.is_valid() || !target.is_valid()) return -1;
+  if (!adjacent(pm, center, from) || !adjacent(pm, center, until)) return -1;
+  std::uint32_t spoke = from;
   double sum = 0;
   for (std::size_t guard = 0; guard < 1024; ++guard) {
-    const auto f = mesh.face_handle(h);
-    if (!f.is_valid()) return -1;
-    const auto next_vertex = mesh.to_vertex_handle(mesh.next_halfedge_handle(h));
-    sum += corner_angle(pm.positions[center], pm.positions[mesh.to_vertex_handle(h).idx()], pm.positions[next_vertex.idx()]);
-    h = mesh.ccw_rotated_halfedge_handle(h);
-    if (h == target) return sum;
+    const std::uint32_t next = next_around(pm, center, spoke);
+    if (next == kNoIndex) return -1;
+    sum += corner_angle(pm.positions[center], pm.positions[spoke], pm.positions[next]);
+    spoke = next;
+    if (spoke == until) return sum;
   }
   return -1;
 }

@@ -13,6 +13,7 @@
 
 #include "engine/errors.h"
 #include "engine/internal/geometry.h"
+#include "engine/internal/stopwatch.h"
 
 namespace featureline {
 namespace {
@@ -24,22 +25,32 @@ Eigen::Vector3d to_eigen(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
 // Counts edges with more than two triangles and vertices whose triangles form more than
 // one edge-connected fan, on the input soup (before OpenMesh had to split anything).
 void count_non_manifold(const RawMesh& raw, MeshStatistics& stats) {
-  std::vector<std::uint64_t> keys;
-  keys.reserve(raw.triangles.size() * 3);
-  for (const auto& t : raw.triangles) {
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
-    for (int k = 0; k < 3; ++k) keys.push_back(edge_key(t[k], t[(k + 1) % 3]));
-  }
-  std::sort(keys.begin(), keys.end());
-  for (std::size_t i = 0; i < keys.size();) {
-    std::size_t j = i;
-    while (j < keys.size() && keys[j] == keys[i]) ++j;
-    if (j - i > 2) ++stats.non_manifold_edges;
-    i = j;
+  // Edges bucketed by their lower end (a counting sort, as in build_face_neighbors), then
+  // counted by their upper end inside each bucket: a handful of entries each.
+  const std::size_t n = raw.positions.size();
+  auto degenerate_triangle = [](const std::array<std::uint32_t, 3>& t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; };
+  std::vector<std::uint32_t> offsets(n + 1, 0);
+  for (const auto& t : raw.triangles)
+    if (!degenerate_triangle(t))
+      for (int k = 0; k < 3; ++k) ++offsets[std::min(t[k], t[(k + 1) % 3]) + 1];
+  std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+  std::vector<std::uint32_t> upper(offsets.back());
+  std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
+  for (const auto& t : raw.triangles)
+    if (!degenerate_triangle(t))
+      for (int k = 0; k < 3; ++k) upper[fill[std::min(t[k], t[(k + 1) % 3])]++] = std::max(t[k], t[(k + 1) % 3]);
+  for (std::size_t v = 0; v < n; ++v) {
+    const auto first = upper.begin() + offsets[v], last = upper.begin() + offsets[v + 1];
+    std::sort(first, last);
+    for (auto i = first; i != last;) {
+      auto j = i;
+      while (j != last && *j == *i) ++j;
+      if (j - i > 2) ++stats.non_manifold_edges;
+      i = j;
+    }
   }
 
   // Fans: per vertex, union the incident triangles that share an edge through the vertex.
-  const std::size_t n = raw.positions.size();
   const VertexFaces incident = build_vertex_faces(raw.triangles, n);
   auto degenerate = [&](std::uint32_t f) {
     const auto& t = raw.triangles[f];
@@ -208,7 +219,7 @@ void measure_boundary_and_box(PreparedMesh& pm) {
   stats.bbox_max = {hi.x(), hi.y(), hi.z()};
 }
 
-// The face tables and the nearest-vertex index every request reads (built once here).
+// The face tables every request reads (built once here).
 void build_face_tables(PreparedMesh& pm) {
   const std::size_t n = pm.positions.size();
   pm.vertex_faces = build_vertex_faces(pm.triangles, n);
@@ -217,7 +228,6 @@ void build_face_tables(PreparedMesh& pm) {
   for (std::uint32_t f = 0; f < pm.triangles.size(); ++f)
     for (int k = 0; k < 3; ++k)
       if (pm.face_neighbors[f][k] == kNoIndex) pm.boundary_vertex[pm.triangles[f][k]] = pm.boundary_vertex[pm.triangles[f][(k + 1) % 3]] = 1;
-  pm.vertex_index = VertexIndex(pm.positions, pm.component);
 }
 
 // Curvature range and percentiles of the feature value; the curvature scale.
@@ -307,6 +317,7 @@ std::size_t PreparedMesh::memory_bytes() const {
 
 std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options, const Cancellation* cancel) {
   const auto start = Clock::now();
+  auto clock = start;
   // OpenMesh prints add_face failures ("patch re-linking failed") to std::cerr; we handle and
   // report every such face ourselves, so its stream is switched off once for the process.
   static std::once_flag quiet;
@@ -327,15 +338,22 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   stats.faces = mesh.n_faces();
   pm.positions.resize(n);
   for (auto v : mesh.vertices()) pm.positions[v.idx()] = to_eigen(mesh.point(v));
+  pm.timings.triangles_ms = lap_ms(clock);
   build_vertex_adjacency(pm);
   label_components(pm);
   measure_boundary_and_box(pm);
+  pm.timings.adjacency_ms = lap_ms(clock);
   build_face_tables(pm);
+  pm.timings.tables_ms = lap_ms(clock);
+  pm.vertex_index = VertexIndex(pm.positions, pm.component);
+  pm.timings.index_ms = lap_ms(clock);
 
   throw_if_cancelled(cancel);
-  pm.vertex_normals = compute_vertex_normals(mesh);
-  pm.curvature = compute_curvature_field(mesh, pm.positions, pm.vertex_normals, {pm.neighbor_offsets, pm.neighbors},
-                                         options.curvature, cancel);
+  pm.vertex_normals = compute_vertex_normals(pm.positions, pm.triangles);
+  pm.timings.normals_ms = lap_ms(clock);
+  const MeshTablesView tables{pm.positions, pm.triangles, pm.face_neighbors, pm.boundary_vertex, {pm.neighbor_offsets, pm.neighbors, pm.neighbor_edge_lengths}};
+  pm.curvature = compute_curvature_field(tables, pm.vertex_normals, options.curvature, cancel);
+  pm.timings.curvature_ms = lap_ms(clock);
   stats.curvature_method = to_string(options.curvature.method);
   stats.noise = pm.curvature.noise;
   stats.curvature_radius = pm.curvature.radius;

@@ -52,6 +52,17 @@ struct MeshStatistics {
   std::size_t crease_edges = 0;   ///< edges sharper than that
 };
 
+/// Wall time of each stage of prepare_mesh, milliseconds (bench_pipeline prints them; the
+/// curvature stage's own parts are in PreparedMesh::curvature.timings).
+struct PrepareTimings {
+  double triangles_ms = 0;  ///< non-manifold counts, the OpenMesh mesh and the triangle list
+  double adjacency_ms = 0;  ///< vertex adjacency, components, boundary loops, bounding box
+  double tables_ms = 0;     ///< faces around vertices, faces across edges, boundary flags
+  double index_ms = 0;      ///< the k-d tree of vertices
+  double normals_ms = 0;    ///< vertex normals
+  double curvature_ms = 0;  ///< compute_curvature_field, all of it
+};
+
 /// Faces around each vertex in compressed rows: the faces of v, in increasing id order, are
 /// faces[offsets[v] .. offsets[v+1]).
 struct VertexFaces {
@@ -104,6 +115,7 @@ struct PreparedMesh {
   MeshStatistics statistics;
   std::vector<std::string> warnings;
   double prepare_ms = 0;
+  PrepareTimings timings;
 
   std::size_t n_vertices() const { return positions.size(); }
   /// The vertex nearest p among those that belong to a triangle (the lowest id among equally
