@@ -155,7 +155,7 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
       option<O>("dense_line_edges", {1, 1000}, "Automatic rings: lines of this many edges get 3 rings, twice as many 4, "
                 "four times 6, eight times 8", "", &O::strip, &StripOptions::dense_line_edges),
       option<O>("flattening", {}, "How the strip is laid out in the plane: the paper's similar triangles, a conformal "
-                "map, or the paper's where it keeps 97% of the strip", "--flattening", &O::strip, &StripOptions::flattening),
+                "map, or the paper's where it keeps 95% of the strip (97% on noisy meshes)", "--flattening", &O::strip, &StripOptions::flattening),
       option<O>("max_edge_distortion", {0.01, 100}, "Flattened triangles whose edges stretch by more than this "
                 "fraction are left out of the snake's domain", "", &O::strip, &StripOptions::max_edge_distortion),
       option<O>("refine", {}, "Refine the initial line with the snake", "--no-refine", &O::refine),

@@ -27,8 +27,9 @@ enum class StripFlattening {
   /// triangle as close to similar to its 3D shape as all the others allow, so noise spreads
   /// out instead of compounding.
   conformal,
-  /// similar_triangles where it keeps at least 97% of the strip's triangles in the snake's
-  /// domain (clean meshes: it is exact on developable strips and cheaper), conformal elsewhere.
+  /// similar_triangles where it keeps at least 95% of the strip's triangles in the snake's domain
+  /// (97% on noisy meshes; clean meshes: it is exact on developable strips and cheaper),
+  /// conformal elsewhere.
   automatic,
 };
 template <>
