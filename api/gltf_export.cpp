@@ -151,6 +151,18 @@ std::string write(const tinygltf::Model& model, bool binary) {
   return out.str();
 }
 
+// The model's one mesh under one node in its one scene, the buffer padded to 4 bytes, as GLB.
+std::string write_single_mesh_glb(tinygltf::Model& model, tinygltf::Node node) {
+  node.mesh = 0;
+  model.nodes.push_back(std::move(node));
+  tinygltf::Scene scene;
+  scene.nodes.push_back(0);
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+  model.buffers[0].data.resize((model.buffers[0].data.size() + 3) / 4 * 4, 0);
+  return write(model, true);
+}
+
 // One 8-byte vertex of the compact GLB: x, y, z quantised over the bounding box, and the
 // curvature in the 2 bytes that glTF's 4-byte alignment of vertex attributes would otherwise
 // leave as padding. An attribute at offset 6 would not be aligned, so `_CURVATURE` is a VEC4
@@ -301,14 +313,7 @@ std::string labelled_mesh_to_glb(const std::vector<Eigen::Vector3d>& positions,
   model.meshes.push_back(mesh);
   tinygltf::Node node;
   node.name = "segments";
-  node.mesh = 0;
-  model.nodes.push_back(node);
-  tinygltf::Scene scene;
-  scene.nodes.push_back(0);
-  model.scenes.push_back(scene);
-  model.defaultScene = 0;
-  model.buffers[0].data.resize((model.buffers[0].data.size() + 3) / 4 * 4, 0);
-  return write(model, true);
+  return write_single_mesh_glb(model, std::move(node));
 }
 
 std::string feature_line_to_glb(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& results, bool include_mesh) {
@@ -333,14 +338,7 @@ std::string prepared_mesh_to_compact_glb(const PreparedMesh& pm) {
   mesh.name = "surface";
   mesh.primitives.push_back(primitive);
   model.meshes.push_back(mesh);
-  node.mesh = 0;
-  model.nodes.push_back(node);
-  tinygltf::Scene scene;
-  scene.nodes.push_back(0);
-  model.scenes.push_back(scene);
-  model.defaultScene = 0;
-  model.buffers[0].data.resize((model.buffers[0].data.size() + 3) / 4 * 4, 0);
-  return write(model, true);
+  return write_single_mesh_glb(model, std::move(node));
 }
 
 std::string feature_line_to_gltf_json(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& results,
