@@ -36,6 +36,8 @@ struct EnumNames<MeshFormat> {
 /// Parses "obj", "OFF", "glb", ... in any case (file extensions come in both); std::nullopt
 /// for anything else.
 std::optional<MeshFormat> parse_mesh_format(std::string_view name);
+/// "obj, off, ply, ...": every format's name from EnumNames<MeshFormat>, for errors.
+std::string supported_formats();
 /// Format from a file name's extension; std::nullopt when unknown.
 std::optional<MeshFormat> mesh_format_from_path(std::string_view path);
 /// Format from the first bytes (magic numbers, keywords); std::nullopt when unsure.

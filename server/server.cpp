@@ -478,7 +478,7 @@ struct FeaturelineServer::Impl {
     if (req.has_param("format")) {
       head.format = parse_mesh_format(req.get_param_value("format"));
       if (!head.format) refuse(415, "unsupported_format", "unknown format \"" + quote_client_text(req.get_param_value("format")) +
-                                                              "\"; use obj, off, ply, stl, glb, gltf or drc");
+                                                              "\"; use one of " + supported_formats());
     } else if (req.has_header("Content-Type")) {
       const std::string type = media_type(req.get_header_value("Content-Type"));
       static const std::map<std::string, MeshFormat> by_type = {

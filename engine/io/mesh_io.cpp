@@ -88,16 +88,11 @@ std::optional<MeshFormat> parse_mesh_format(std::string_view name) {
   return std::nullopt;
 }
 
-namespace {
-
-// "obj, off, ...": every format's name, for errors.
 std::string supported_formats() {
   std::string names;
   for (const auto& entry : EnumNames<MeshFormat>::entries) names += (names.empty() ? "" : ", ") + std::string(entry.second);
   return names;
 }
-
-}  // namespace
 
 std::optional<MeshFormat> mesh_format_from_path(std::string_view path) {
   const std::size_t slash = path.find_last_of("/\\");

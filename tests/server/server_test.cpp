@@ -103,6 +103,16 @@ TEST(InProcessServer, ABadOptionIs400WithTheExactMessage) {
   EXPECT_EQ(json::parse(r->body)["segments"].size(), 2u);  // a border-to-border line: two parts
 }
 
+TEST(InProcessServer, AnUnknownFormatIs415NamingEveryFormatTheReadersTake) {
+  RunningServer server({});
+  auto client = server.client();
+  const auto r = client.Post("/v1/meshes?format=3ds", "solid x", "application/octet-stream");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 415);
+  EXPECT_EQ(error_of(r)["code"], "unsupported_format");
+  EXPECT_EQ(error_of(r)["message"], "unknown format \"3ds\"; use one of obj, off, ply, stl, gltf, glb, drc");
+}
+
 TEST(InProcessServer, ServesTheOptionTables) {
   RunningServer server({});
   auto client = server.client();
