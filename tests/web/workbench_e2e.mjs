@@ -47,6 +47,7 @@ const api = (page) => ({
         lines: f.lines.map((l) => ({ id: l.id, name: l.name, keys: l.keys, closed: l.closed, error: l.error, stale: l.stale, length: l.result?.refined?.length ?? null })),
         activeLineId: f.activeLineId,
         requestCount: f.requestCount,
+        responseCount: f.responseCount,
         retryCount: f.retryCount,
         message: f.message,
         selectedKey: f.selectedKey,
@@ -268,19 +269,24 @@ await h.run(async () => {
   // ---- out of date: a line waiting for its new answer is drawn dashed ---------------------------
   await page.click('#line-list li:first-child .name');
   let release;
+  let heldRequests = 0;
   const held = new Promise((r) => (release = r));
   await page.route('**/feature-lines', async (route) => {
+    ++heldRequests;
     await held;
     await route.continue();
   });
+  const requestsBeforeLoop = (await a.state()).requestCount;
   await page.keyboard.press('c'); // close Line 1: a new request, held back
-  await until('the closed line to be requested', async () => (await a.state()).requestCount > 0 && (await a.state()).lines[0].closed);
+  // Wait for the request itself to reach the route (not just the page's counter).
+  await until('the closed line to be requested', async () => heldRequests > 0 && (await a.state()).lines[0].closed);
   s = await a.state();
   const stats = await a.stats();
   const listStale = await page.locator('#line-list li.stale').count();
   const timingsTitle = await page.textContent('#timings-title');
   await page.screenshot({ path: h.artifact('web-stale.png') });
-  check(s.lines[0].stale && stats.staleLines === 1 && listStale === 1, 'after an edit the last line stays drawn, dashed, marked out of date', () => JSON.stringify({ stats, listStale }));
+  check(s.lines[0].stale && stats.staleLines === 1 && listStale === 1, 'after an edit the last line stays drawn, dashed, marked out of date',
+    () => JSON.stringify({ stale: s.lines[0].stale, closed: s.lines[0].closed, requestsBeforeLoop, requests: s.requestCount, responses: s.responseCount, heldRequests, stats, listStale }));
   check(/out of date/.test(timingsTitle), `the last run's timings say they are out of date ("${timingsTitle}")`);
   release();
   s = await settled(a);
