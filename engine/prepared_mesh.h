@@ -53,12 +53,14 @@ struct MeshStatistics {
 };
 
 /// Wall time of each stage of prepare_mesh, milliseconds (bench_pipeline prints them; the
-/// curvature stage's own parts are in PreparedMesh::curvature.timings).
+/// curvature stage's own parts are in PreparedMesh::curvature.timings). The face tables are
+/// built beside the adjacency and the k-d tree beside the normals and curvature, each timed on
+/// its own thread, so all six can add up to more than the whole; the other four cannot.
 struct PrepareTimings {
   double triangles_ms = 0;  ///< non-manifold counts, the OpenMesh mesh and the triangle list
   double adjacency_ms = 0;  ///< vertex adjacency, components, boundary loops, bounding box
-  double tables_ms = 0;     ///< faces around vertices, faces across edges, boundary flags
-  double index_ms = 0;      ///< the k-d tree of vertices
+  double tables_ms = 0;     ///< faces around vertices, faces across edges, boundary flags (beside adjacency)
+  double index_ms = 0;      ///< the k-d tree of vertices (beside normals and curvature)
   double normals_ms = 0;    ///< vertex normals
   double curvature_ms = 0;  ///< compute_curvature_field, all of it
 };

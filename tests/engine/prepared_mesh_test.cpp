@@ -115,15 +115,18 @@ TEST(PreparedMesh, MemoryCountsTheTables) {
 }
 
 TEST(PreparedMesh, StageTimingsAreConsecutivePartsOfTheWhole) {
-  // The stages are timed with one clock, lap after lap, so they cannot add up to more than the
-  // whole, and the curvature stage's parts not to more than the curvature stage.
+  // The serial stages are timed with one clock, lap after lap, so they cannot add up to more
+  // than the whole, and the curvature stage's parts not to more than the curvature stage. The
+  // face tables and the k-d tree are built beside them: each on its own is within the whole.
   const auto pm = prepare_mesh(make_capsule(1, 2, 32, 8, 6));
   const PrepareTimings& t = pm->timings;
   const CurvatureTimings& c = pm->curvature.timings;
   for (double ms : {t.triangles_ms, t.adjacency_ms, t.tables_ms, t.index_ms, t.normals_ms, t.curvature_ms, c.mean_ms,
                     c.creases_ms, c.noise_ms, c.jet_ms, c.smoothing_ms})
     EXPECT_GE(ms, 0);
-  EXPECT_LE(t.triangles_ms + t.adjacency_ms + t.tables_ms + t.index_ms + t.normals_ms + t.curvature_ms, pm->prepare_ms);
+  EXPECT_LE(t.triangles_ms + t.adjacency_ms + t.normals_ms + t.curvature_ms, pm->prepare_ms);
+  EXPECT_LE(t.tables_ms, pm->prepare_ms);
+  EXPECT_LE(t.index_ms, pm->prepare_ms);
   EXPECT_LE(c.mean_ms + c.creases_ms + c.noise_ms + c.jet_ms + c.smoothing_ms, t.curvature_ms);
   EXPECT_GT(c.jet_ms, 0);  // the default field is the jet: its fits ran
 }
