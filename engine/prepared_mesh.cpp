@@ -113,14 +113,9 @@ void add_triangles(const RawMesh& raw, PreparedMesh& pm, const Cancellation* can
       continue;
     }
     for (int k = 0; k < 3; ++k) corners[k] = TriMesh::VertexHandle(int(tri[k]));
-    bool fits = true;
-    for (int k = 0; k < 3 && fits; ++k) {
-      if (!mesh.is_boundary(corners[k])) fits = false;  // a closed fan takes no more faces
-      const auto he = mesh.find_halfedge(corners[k], corners[(k + 1) % 3]);
-      if (he.is_valid() && !mesh.is_boundary(he)) fits = false;  // that side of the edge is taken
-    }
-    TriMesh::FaceHandle face;
-    if (fits) face = mesh.add_face(corners);
+    // add_face checks before it changes anything: a closed fan takes no more faces, a side of
+    // an edge that is taken takes no other, and a fan it cannot re-link refuses the face.
+    TriMesh::FaceHandle face = mesh.add_face(corners);
     if (!face.is_valid()) {
       for (int k = 0; k < 3; ++k) {
         const TriMesh::Point copy = mesh.point(corners[k]);  // add_vertex may reallocate the points
