@@ -268,6 +268,9 @@ await h.run(async () => {
 
   // ---- out of date: a line waiting for its new answer is drawn dashed ---------------------------
   await page.click('#line-list li:first-child .name');
+  s = await settled(a); // nothing in flight: the next request is the closed line's
+  check(s.activeLineId === s.lines[0].id && !s.lines[0].closed && !s.lines[0].stale, 'a click on Line 1 in the list makes it the active line',
+    () => JSON.stringify({ active: s.activeLineId, line: s.lines[0] }));
   let release;
   let heldRequests = 0;
   const held = new Promise((r) => (release = r));
