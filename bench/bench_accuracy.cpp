@@ -388,10 +388,10 @@ using Clock = std::chrono::steady_clock;
 
 // --trace: what happened to one line, for finding out why it is off.
 void trace_line(const std::string& name, double noise, int seed, double estimated_noise, const FeatureLineResult& r,
-                const std::vector<Eigen::Vector3d>& refined, const LineSpec& spec) {
-  std::fprintf(stderr, "%s, noise %g%% (estimated %.3f), seed %d: initial %.3f, refined %.3f\n", name.c_str(), noise,
-               estimated_noise, seed,
-               line_distance(r.initial_points, r.closed, spec.distance).mean, line_distance(refined, r.closed, spec.distance).mean);
+                const std::vector<Eigen::Vector3d>& refined, const LineSpec& spec, double floor) {
+  std::fprintf(stderr, "%s, noise %g%% (estimated %.3f), seed %d: initial %.3f, refined %.3f, floor %.3f\n", name.c_str(),
+               noise, estimated_noise, seed, line_distance(r.initial_points, r.closed, spec.distance).mean,
+               line_distance(refined, r.closed, spec.distance).mean, floor);
   for (const auto& w : r.warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
   for (const auto& p : r.piece_reports)
     std::fprintf(stderr, "  piece %u..%u (%zu edges): %s%s%s, %d iterations%s\n", p.from, p.to, p.edges, p.kept.c_str(),
@@ -505,7 +505,6 @@ LineOutcome run_line(const PreparedMesh& mesh, const LineSpec& spec, const Varia
   try {
     const auto r = detect_feature_line(mesh, request);
     const auto refined = refined_positions(r);
-    if (at.trace) trace_line(at.c.name, at.noise, at.seed, mesh.statistics.noise, r, refined, spec);
     out.initial = line_distance(r.initial_points, r.closed, spec.distance);
     out.refined = line_distance(refined, r.closed, spec.distance);
     out.turning = closed_turning(refined, r.closed);
@@ -513,6 +512,7 @@ LineOutcome run_line(const PreparedMesh& mesh, const LineSpec& spec, const Varia
     out.fallbacks = r.initial.fallbacks.size();
     out.ms = r.timings.total_ms;
     out.floor = surface_floor(mesh, spec);
+    if (at.trace) trace_line(at.c.name, at.noise, at.seed, mesh.statistics.noise, r, refined, spec, out.floor);
   } catch (const std::exception& e) {
     out.failed = true;
     out.error = e.what();
@@ -566,7 +566,8 @@ void print_header(int seeds, const std::vector<int>& sizes, const std::map<std::
   std::printf("\n\nDistances in units (grid spacing / truth chain's mean edge); noise: RMS displacement in %% of the\n"
               "grid spacing (fields), outline edge (slab) or mesh mean edge (real CAD); worse: refined mean >\n"
               "initial mean + %.3f; floor (CAD): mean distance from the true crease to the nearest point of the\n"
-              "(noisy) surface, under which no line lying on that surface can go.\n\n", kWorseTolerance);
+              "(noisy) surface, under which no line lying on that surface can go; noisy CAD above floor: the\n"
+              "summed distance above that floor, refined over initial.\n\n", kWorseTolerance);
 }
 
 // One row per variant, case and noise level.
@@ -587,7 +588,7 @@ void print_rows(const BenchResults& results, const std::vector<Variant>& variant
 
 // One variant's worst cases, smooth fields and CAD apart.
 struct VariantSummary {
-  double smooth_clean = -1, smooth_noisy = -1, cad_clean = -1, cad_noisy_ref = 0, cad_noisy_init = 0;
+  double smooth_clean = -1, smooth_noisy = -1, cad_clean = -1, cad_noisy_ref = 0, cad_noisy_init = 0, cad_noisy_floor = 0;
   std::string smooth_clean_case, smooth_noisy_case, cad_clean_case;
   std::size_t smooth_worse = 0, smooth_lines = 0, cad_worse = 0, cad_lines = 0, errors = 0;
 };
@@ -610,7 +611,8 @@ VariantSummary summarize_variant(const BenchResults& results, const std::vector<
       if (noise == 0 && s.refined_mean > v.cad_clean) v.cad_clean = s.refined_mean, v.cad_clean_case = label;
       if (noise > 0)
         for (const auto& l : row.lines)
-          if (!l.failed) v.cad_noisy_ref += l.refined.mean, v.cad_noisy_init += l.initial.mean;
+          if (!l.failed)
+            v.cad_noisy_ref += l.refined.mean, v.cad_noisy_init += l.initial.mean, v.cad_noisy_floor += std::max(0.0, l.floor);
     }
   }
   return v;
@@ -619,14 +621,15 @@ VariantSummary summarize_variant(const BenchResults& results, const std::vector<
 void print_summary(const BenchResults& results, const std::vector<Variant>& variants, const std::vector<Case>& cases) {
   std::printf("\n## Summary per variant\n\n");
   std::printf("| variant | smooth: worst clean ref mean | smooth: worst noisy (10-20%%) ref mean | smooth: worse lines |"
-              " CAD: worst clean ref mean | CAD: noisy ref/init | CAD: worse lines | errors |\n");
-  std::printf("|---|---|---|---:|---|---:|---:|---:|\n");
+              " CAD: worst clean ref mean | CAD: noisy ref/init | CAD: noisy above floor, ref/init | CAD: worse lines | errors |\n");
+  std::printf("|---|---|---|---:|---|---:|---:|---:|---:|\n");
   for (std::size_t vi = 0; vi < variants.size(); ++vi) {
     const VariantSummary v = summarize_variant(results, cases, vi);
-    std::printf("| %s | %.3f (%s) | %.3f (%s) | %zu/%zu | %.3f (%s) | %s | %zu/%zu | %zu |\n", variants[vi].name.c_str(),
+    const double floor = v.cad_noisy_floor;
+    std::printf("| %s | %.3f (%s) | %.3f (%s) | %zu/%zu | %.3f (%s) | %s | %s | %zu/%zu | %zu |\n", variants[vi].name.c_str(),
                 v.smooth_clean, v.smooth_clean_case.c_str(), v.smooth_noisy, v.smooth_noisy_case.c_str(), v.smooth_worse,
                 v.smooth_lines, v.cad_clean, v.cad_clean_case.c_str(), ratio_text(v.cad_noisy_ref, v.cad_noisy_init).c_str(),
-                v.cad_worse, v.cad_lines, v.errors);
+                ratio_text(v.cad_noisy_ref - floor, v.cad_noisy_init - floor).c_str(), v.cad_worse, v.cad_lines, v.errors);
   }
 }
 
