@@ -172,29 +172,12 @@ std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::ve
     std::uint32_t generation = 0;
   };
   std::vector<Scratch> scratch(worker_count());
-  std::vector<std::uint32_t> order;
-  order.reserve(n);
-  {
-    std::vector<char> seen(n, 0);
-    for (std::uint32_t s0 = 0; s0 < n; ++s0) {
-      if (seen[s0]) continue;
-      seen[s0] = 1;
-      const std::size_t first = order.size();
-      order.push_back(s0);
-      for (std::size_t head = first; head < order.size(); ++head) {
-        const auto a = order[head];
-        for (auto k = adj.offsets[a]; k < adj.offsets[a + 1]; ++k)
-          if (!seen[adj.neighbors[k]]) seen[adj.neighbors[k]] = 1, order.push_back(adj.neighbors[k]);
-      }
-    }
-  }
   parallel_ranges(n, [&](std::size_t begin, std::size_t end, std::size_t worker) {
     auto& [stamp, hood, generation] = scratch[worker];
     if (stamp.empty()) stamp.assign(n, 0);
-    for (std::size_t i = begin; i < end; ++i) {
-      const std::size_t v = getenv("TMPORDER") ? order[i] : i;
+    for (std::size_t v = begin; v < end; ++v) {
       // Worker threads must not throw: they stop, and the caller throws below.
-      if ((i & 4095) == 0 && cancel != nullptr && cancel->requested()) break;
+      if ((v & 4095) == 0 && cancel != nullptr && cancel->requested()) break;
       if (v % stride != 0) continue;
       field.k_max[v] = field.k_min[v] = fallback[v];
       if (!(local[v] > 0)) continue;
