@@ -171,10 +171,8 @@ std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::ve
     std::vector<std::uint32_t> stamp, hood;
     std::uint32_t generation = 0;
   };
-  // Allocated (and freed) by this thread: worker threads' allocations land in their own malloc
-  // arenas, and igea's resident growth per cached triangle then varied from 163 to 211 bytes
-  // between runs of bench_server (152-176 this way; 161-162 at 45350a0, whose fit threads
-  // allocated and freed their own).
+  // Allocated (and freed) by this thread, so the largest buffers of the fits come from and go
+  // back to one malloc arena instead of the workers' (README, Benchmarks: resident memory).
   std::vector<Scratch> scratch(worker_count());
   for (auto& s : scratch) s.stamp.assign(n, 0);
   parallel_ranges(n, [&](std::size_t begin, std::size_t end, std::size_t worker) {
