@@ -95,14 +95,10 @@ JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::V
   // its smaller effective neighbourhood put the refined line on noisy ridges of 24k-245k
   // triangles 30-85% further from the crest (bench_accuracy; slightly closer on 5k).
   // One exponential per point (the frame and the fit use the same weights).
-  // The offsets are kept for the fit below, which then reads them in order.
   thread_local std::vector<double> weights;
-  thread_local std::vector<Eigen::Vector3d> offsets;
   weights.resize(hood.size());
-  offsets.resize(hood.size());
   for (std::size_t i = 0; i < hood.size(); ++i) {
-    offsets[i] = P[hood[i]] - P[v];
-    weights[i] = std::exp(-2 * offsets[i].squaredNorm() * inv_r * inv_r);
+    weights[i] = std::exp(-2 * (P[hood[i]] - P[v]).squaredNorm() * inv_r * inv_r);
     n += weights[i] * N[hood[i]];
   }
   if (!(n.norm() > 1e-12)) n = N[v];
@@ -113,7 +109,7 @@ JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::V
   Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
   double weight_sum = 0, hh = 0;
   for (std::size_t i = 0; i < hood.size(); ++i) {
-    const Eigen::Vector3d x = offsets[i] * inv_r;
+    const Eigen::Vector3d x = (P[hood[i]] - P[v]) * inv_r;
     const double u = x.dot(t1), s = x.dot(t2), h = x.dot(n);
     const double weight = weights[i];
     // Set coefficient by coefficient: perf put a sixth of the fit's samples on Eigen's comma initializer.

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <future>
 #include <cmath>
+#include <future>
 #include <numeric>
 #include <sstream>
 #include <unordered_map>
@@ -89,8 +89,8 @@ double percentile(std::vector<double> values, double q) {
 // Adds the soup's triangles to pm.mesh and pm.triangles in input order. OpenMesh refuses faces
 // that would make an edge or vertex non-manifold (its error stream is switched off in
 // prepare_mesh); like OpenMesh's own reader, we give such a face its own copies of the vertices
-// so it is kept and every id stays valid. Degenerate triangles (a repeated index) are dropped; both are
-// reported in pm.warnings.
+// so it is kept and every id stays valid. Degenerate triangles (a repeated index) are dropped;
+// both are reported in pm.warnings.
 void add_triangles(const RawMesh& raw, PreparedMesh& pm, const Cancellation* cancel) {
   TriMesh& mesh = pm.mesh;
   MeshStatistics& stats = pm.statistics;
