@@ -1,13 +1,18 @@
-// featureline: detect feature lines and describe meshes from the command line.
-// Errors: exit status 1 (usage: 2) and one line on stderr.
+// featureline: detect feature lines, segment and describe meshes from the command line.
+// Requests are the HTTP API's JSON bodies (built from flags, or read with --request), so a
+// script moves between the two without translation. Exit status: 0 done, 1 the input was
+// refused (one line on stderr), 2 a usage error (one line and a pointer to --help).
 #include <algorithm>
 #include <chrono>
-#include <cstring>
+#include <cstdio>
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <iterator>
 #include <string>
 #include <vector>
+
+#include <CLI/CLI.hpp>
 
 #include "api/feature_line_json.h"
 #include "api/gltf_export.h"
@@ -18,274 +23,441 @@
 #include "engine/feature_line.h"
 #include "engine/mesh_io.h"
 #include "engine/segmentation.h"
+#include "featureline_version.h"
 
 namespace {
 
 using featureline::InvalidInputError;
 using nlohmann::json;
 
-// The fixed part of the help; the option flags are listed from the option tables (usage()).
-const char* const kUsage = R"(usage:
-  featureline detect MESH --keys 10,20,30 [options]
-  featureline segment MESH --loop 1,2,3,4 [--loop 5,6,7] [--line 8,9] [segment options] [options]
-  featureline info MESH [curvature options]
-  featureline options      every option with its type, default, limits and description (JSON)
+// ---- what the command line asks for ----------------------------------------------------------
 
-detect:
-  --keys LIST             comma-separated key vertex ids (0-based, file order)
-  --closed                join the last key to the first (a loop)
-  --weights A,B,G,D       marching weights alpha,beta,gamma,delta (paper: 1,1,1,2)
-  --options JSON          any options as a JSON object (see `featureline options`); flags win
-  --out FILE              write FILE.json or FILE.glb instead of printing JSON
-
-segment (the detect options apply to every line):
-  --loop LIST             keys of a closed line (repeatable)
-  --line LIST             keys of an open line ending on the boundary or another line (repeatable)
-  --out FILE              parts.glb (one primitive per part) or labels.json
-
-reading limits (every command):
-  --max-triangles N       refuse meshes that expand to more triangles (glTF: over all node
-                          instances and primitives); default 8388608, the server's default
-  --max-vertices N        the same for vertex records; default 8388608
-)";
-
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
+struct Inputs {
+  std::vector<std::string> meshes;  // "-" is standard input
+  std::string format;               // of standard input (else from the extension or content)
+  featureline::ReadMeshOptions limits;
+  json curvature = json::object();  // curvature table flags
 };
 
-std::vector<double> parse_numbers(const std::string& text, std::size_t count, const char* flag) {
-  std::vector<double> values;
-  std::size_t pos = 0;
-  while (pos <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', pos), text.size());
-    try {
-      std::size_t used = 0;
-      const std::string item = text.substr(pos, comma - pos);
-      values.push_back(std::stod(item, &used));
-      if (used != item.size()) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw UsageError(std::string(flag) + " expects " + std::to_string(count) + " comma-separated numbers");
-    }
-    pos = comma + 1;
-  }
-  if (values.size() != count)
-    throw UsageError(std::string(flag) + " expects " + std::to_string(count) + " comma-separated numbers");
-  return values;
-}
-
-double parse_number(const std::string& text, const char* flag) { return parse_numbers(text, 1, flag)[0]; }
-
-std::size_t parse_count(const std::string& text, const char* flag) {
-  const double v = parse_number(text, flag);
-  if (!(v >= 1 && v <= 4e9) || v != double(std::size_t(v))) throw UsageError(std::string(flag) + " expects an integer from 1 to 4000000000");
-  return std::size_t(v);
-}
+struct LineFlags {
+  std::string keys, points, request_path, out_path, options_text;
+  std::vector<double> weights;
+  bool closed = false;
+  json options = json::object();       // feature-line table flags (they win over --options)
+  json segmentation = json::object();  // segmentation table flags
+  std::vector<std::string> loops, open_lines;
+};
 
 bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-// "a, b or c": the accepted names of a choice flag.
 std::string either(const std::vector<std::string>& names) {
   std::string text;
   for (std::size_t i = 0; i < names.size(); ++i) text += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
   return text;
 }
 
-std::string value_text(const json& value) {
-  if (value.is_string()) return value.get<std::string>();
-  if (value.is_number()) return featureline::format_number(value.get<double>());
-  return value.dump();
+double parse_number(const std::string& text, const std::string& flag) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size()) throw CLI::ValidationError(flag + " expects a number, not \"" + text + "\"");
+  return v;
 }
 
-// The help lines of one option table's flags.
+// The flags of one option table, each writing its value (checked by the table's row, so the
+// limits and names are the HTTP API's) into `out`, nested as the JSON options are.
 template <typename Options>
-std::string flag_help(const featureline::OptionTable<Options>& table) {
+void add_table_flags(CLI::App& command, const featureline::OptionTable<Options>& table, json& out, const std::string& group) {
   using featureline::OptionKind;
-  std::string text;
   for (const auto& field : table) {
-    const auto& spec = field.spec;
+    const featureline::OptionSpec& spec = field.spec;
     if (spec.cli_flag.empty()) continue;
-    std::string flag = spec.cli_flag + (spec.kind == OptionKind::choice ? " M" : spec.kind == OptionKind::boolean ? "" : " N");
-    flag.resize(std::max<std::size_t>(flag.size() + 1, 24), ' ');
-    std::string detail = "default " + value_text(spec.default_value);
-    if (spec.kind == OptionKind::choice) detail = either(spec.choices) + "; " + detail;
-    if (spec.kind == OptionKind::number || spec.kind == OptionKind::integer)
-      detail = featureline::format_number(spec.minimum) + " to " + featureline::format_number(spec.maximum) + "; " + detail;
-    if (spec.kind == OptionKind::boolean)
-      text += "  " + flag + spec.name + " = " + value_text(!spec.default_value.template get<bool>()) + ": " + spec.description + "\n";
-    else
-      text += "  " + flag + spec.description + " (" + detail + ")\n";
-  }
-  return text;
-}
-
-std::string usage() {
-  return std::string(kUsage) + "\ndetect options:\n" + flag_help(featureline::feature_line_option_table()) +
-         "\nsegment options:\n" + flag_help(featureline::segmentation_option_table()) +
-         "\ncurvature options (every command):\n" + flag_help(featureline::curvature_option_table());
-}
-
-// Sets the option of `table` whose CLI flag is `flag` into `out` (nested like the JSON options);
-// false when the table has no such flag. A boolean flag sets the opposite of the default.
-template <typename Options>
-bool table_flag(const featureline::OptionTable<Options>& table, const std::string& flag,
-                const std::function<std::string()>& value, json& out) {
-  for (const auto& field : table) {
-    const auto& spec = field.spec;
-    if (spec.cli_flag != flag) continue;
-    json given;
-    if (spec.kind == featureline::OptionKind::boolean) {
-      given = !spec.default_value.template get<bool>();
-    } else if (spec.kind == featureline::OptionKind::choice) {
-      given = value();
-      if (std::find(spec.choices.begin(), spec.choices.end(), given.get<std::string>()) == spec.choices.end())
-        throw UsageError(flag + " must be " + either(spec.choices));
-    } else {
-      given = parse_number(value(), flag.c_str());
+    const json::json_pointer at("/" + featureline::dotted_to_pointer(spec.name));
+    const auto set = [&out, at, spec](const json& value) {
+      try {
+        out[at] = featureline::check_option_value(spec, value, spec.cli_flag);
+      } catch (const InvalidInputError& e) {
+        throw CLI::ValidationError(e.what());
+      }
+    };
+    if (spec.kind == OptionKind::boolean) {
+      const bool value = !spec.default_value.template get<bool>();
+      command.add_flag_callback(spec.cli_flag, [set, value] { set(value); },
+                                spec.description + " (sets " + spec.name + " to " + (value ? "true" : "false") + ")")
+          ->group(group);
+      continue;
     }
-    out[json::json_pointer("/" + featureline::dotted_to_pointer(spec.name))] = featureline::check_option_value(spec, given, flag);
-    return true;
+    std::string detail = "default " + spec.default_value.dump();
+    if (spec.kind == OptionKind::choice) detail = either(spec.choices) + "; " + detail;
+    else detail = featureline::format_number(spec.minimum) + " to " + featureline::format_number(spec.maximum) + "; " + detail;
+    command
+        .add_option_function<std::string>(
+            spec.cli_flag,
+            [set, spec](const std::string& text) {
+              if (spec.kind != OptionKind::choice) return set(parse_number(text, spec.cli_flag));
+              for (const auto* names : {&spec.choices, &spec.aliases})
+                for (const auto& name : *names)
+                  if (name == text) return set(text);
+              throw CLI::ValidationError(spec.cli_flag + " must be " + either(spec.choices));
+            },
+            spec.description + " (" + detail + ")")
+        ->type_name(spec.kind == OptionKind::choice ? "NAME" : "X")
+        ->group(group);
   }
-  return false;
 }
 
-// What the command line asks for.
-struct CommandLine {
-  std::string command, mesh_path, keys_text, out_path;
-  bool closed = false;
-  json line_options = json::object();          // from --options
-  json line_flags = json::object();            // from flags (they win over --options)
-  json segmentation_flags = json::object();
-  json curvature_flags = json::object();
-  std::vector<std::pair<std::string, bool>> segment_lines;  // keys, closed
-  featureline::ReadMeshOptions read_options;
+void add_inputs(CLI::App& command, Inputs& in, bool many) {
+  auto* meshes = command.add_option("mesh", in.meshes, many ? "Mesh files (- for standard input); several give a JSON array"
+                                                            : "Mesh file (- for standard input)")
+                     ->required()
+                     ->type_name("MESH");
+  if (!many) meshes->expected(1);
+  command.add_option("--format", in.format, "Format of standard input: " + featureline::supported_formats())->type_name("NAME");
+  command.add_option("--max-triangles", in.limits.max_triangles,
+                     "Refuse meshes that expand to more triangles (glTF: over all instances and primitives); the server's default")
+      ->check(CLI::Range(std::size_t(1), std::size_t(4000000000)))
+      ->capture_default_str()
+      ->group("Reading limits");
+  command.add_option("--max-vertices", in.limits.max_vertices, "The same for vertex records")
+      ->check(CLI::Range(std::size_t(1), std::size_t(4000000000)))
+      ->capture_default_str()
+      ->group("Reading limits");
+  add_table_flags(command, featureline::curvature_option_table(), in.curvature, "Curvature (how the mesh is prepared)");
+}
+
+void add_line_flags(CLI::App& command, LineFlags& f) {
+  auto* keys = command.add_option("--keys", f.keys, "Key vertex ids, comma-separated (0-based, file order)")->type_name("LIST");
+  auto* points = command.add_option("--points", f.points, "Key points \"x,y,z;x,y,z;...\" (each becomes the nearest vertex)")
+                     ->type_name("LIST");
+  auto* request = command.add_option("--request", f.request_path,
+                                     "A request body of POST /v1/meshes/{id}/feature-lines (one line or {\"lines\": [...]}), "
+                                     "FILE or - for standard input")
+                      ->type_name("FILE");
+  keys->excludes(points)->excludes(request);
+  points->excludes(request);
+  command.add_flag("--closed", f.closed, "Join the last key to the first (a loop)")->excludes(request);
+  command.add_option("--weights", f.weights, "Marching weights alpha,beta,gamma,delta (paper: 1,1,1,2)")
+      ->expected(4)
+      ->delimiter(',')
+      ->type_name("A,B,G,D");
+  command.add_option("--options", f.options_text, "Options as a JSON object (see `featureline options`); flags win")
+      ->type_name("JSON");
+  add_table_flags(command, featureline::feature_line_option_table(), f.options, "Feature-line options");
+}
+
+// ---- reading ----------------------------------------------------------------------------------
+
+std::string read_stream(std::istream& in, std::size_t limit, const std::string& what) {
+  std::string bytes;
+  char buffer[1 << 16];
+  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
+    bytes.append(buffer, std::size_t(in.gcount()));
+    if (bytes.size() > limit)
+      throw featureline::LimitExceededError(what + " has more than " + std::to_string(limit) + " bytes");
+  }
+  return bytes;
+}
+
+featureline::MeshFile read_input_mesh(const std::string& path, const Inputs& in) {
+  featureline::MeshFile file;
+  std::optional<featureline::MeshFormat> format;
+  if (!in.format.empty() && !(format = featureline::parse_mesh_format(in.format)))
+    throw CLI::ValidationError("--format must be one of " + featureline::supported_formats());
+  if (path != "-") {
+    file = featureline::read_mesh_file_bytes(path, in.limits);
+  } else {
+    file.bytes = read_stream(std::cin, in.limits.max_file_bytes, "standard input");
+    if (!format) format = featureline::sniff_mesh_format(file.bytes);
+    if (!format) throw CLI::ValidationError("cannot tell the format of standard input: pass --format");
+  }
+  if (format) file.format = *format;
+  return file;
+}
+
+std::shared_ptr<const featureline::PreparedMesh> prepare(const std::string& path, const Inputs& in, double& load_ms) {
+  featureline::PrepareOptions options;
+  featureline::apply_options(featureline::curvature_option_table(), in.curvature, "", options.curvature);
+  const auto start = std::chrono::steady_clock::now();
+  const featureline::MeshFile file = read_input_mesh(path, in);
+  featureline::RawMesh raw = featureline::read_mesh(file.bytes, file.format, in.limits);
+  load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return featureline::prepare_mesh(std::move(raw), options);
+}
+
+json read_request_file(const std::string& path) {
+  std::string text;
+  if (path == "-") {
+    text = read_stream(std::cin, featureline::RequestLimits::max_json_bytes, "the request");
+  } else {
+    std::ifstream file(path, std::ios::binary);
+    if (!file) throw InvalidInputError("cannot open the request file '" + path + "'");
+    text = read_stream(file, featureline::RequestLimits::max_json_bytes, "request file '" + path + "'");
+  }
+  try {
+    return json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw InvalidInputError("the request is not valid JSON: " + std::string(e.what()));
+  }
+}
+
+// ---- requests as the HTTP API's bodies ------------------------------------------------------
+
+json split_list(const std::string& text, char separator, const std::function<json(const std::string&)>& item) {
+  json list = json::array();
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    const std::size_t end = std::min(text.find(separator, pos), text.size());
+    list.push_back(item(text.substr(pos, end - pos)));
+    pos = end + 1;
+  }
+  return list;
+}
+
+json key_ids(const std::string& text) {
+  json ids = json::array();
+  for (const auto id : featureline::parse_key_list(text)) ids.push_back(id);
+  return ids;
+}
+
+json key_points(const std::string& text) {
+  return split_list(text, ';', [](const std::string& point) {
+    const json xyz = split_list(point, ',', [](const std::string& x) { return json(parse_number(x, "--points")); });
+    if (xyz.size() != 3) throw CLI::ValidationError("--points expects x,y,z triples separated by ';', not \"" + point + "\"");
+    return json{{"point", xyz}};
+  });
+}
+
+// --options, then the flags over it.
+json flag_options(const LineFlags& f) {
+  json options = json::object();
+  if (!f.options_text.empty()) {
+    try {
+      options = json::parse(f.options_text);
+    } catch (const json::parse_error& e) {
+      throw CLI::ValidationError(std::string("--options is not valid JSON: ") + e.what());
+    }
+    if (!options.is_object()) throw CLI::ValidationError("--options must be a JSON object");
+  }
+  if (!f.weights.empty())
+    options["weights"] = {{"alpha", f.weights[0]}, {"beta", f.weights[1]}, {"gamma", f.weights[2]}, {"delta", f.weights[3]}};
+  options.merge_patch(f.options);
+  return options;
+}
+
+// Each line of a body gets the command line's options over its own.
+void merge_line_options(json& line, const json& options) {
+  if (options.empty() || !line.is_object() || line.contains("refined")) return;
+  json merged = line.value("options", json::object());
+  if (merged.is_object()) merged.merge_patch(options);
+  line["options"] = merged;
+}
+
+json feature_line_body(const LineFlags& f) {
+  const json options = flag_options(f);
+  if (!f.request_path.empty()) {
+    json body = read_request_file(f.request_path);
+    if (body.is_object() && body.contains("lines") && body["lines"].is_array())
+      for (auto& line : body["lines"]) merge_line_options(line, options);
+    else merge_line_options(body, options);
+    return body;
+  }
+  if (f.keys.empty() && f.points.empty()) throw CLI::RequiredError("--keys, --points or --request");
+  json line = {{"keys", f.keys.empty() ? key_points(f.points) : key_ids(f.keys)}};
+  if (f.closed) line["closed"] = true;
+  if (!options.empty()) line["options"] = options;
+  return line;
+}
+
+json segmentation_body(const LineFlags& f) {
+  const json options = flag_options(f);
+  json body = f.request_path.empty() ? json::object() : read_request_file(f.request_path);
+  if (!body.is_object()) throw InvalidInputError("the request must be a JSON object");
+  if (f.request_path.empty()) {
+    if (f.loops.empty() && f.open_lines.empty()) throw CLI::RequiredError("--loop, --line or --request");
+    body["lines"] = json::array();
+    for (const auto& keys : f.loops) body["lines"].push_back({{"keys", key_ids(keys)}, {"closed", true}});
+    for (const auto& keys : f.open_lines) body["lines"].push_back({{"keys", key_ids(keys)}});
+  }
+  if (body.contains("lines") && body["lines"].is_array())
+    for (auto& line : body["lines"]) merge_line_options(line, options);
+  body.merge_patch(f.segmentation);
+  return body;
+}
+
+// ---- output -------------------------------------------------------------------------------------
+
+// A command's answer: its JSON, and the same as a GLB when --out asks for one.
+struct Answer {
+  json body;
+  std::function<std::string()> glb;
 };
 
-json parse_options_flag(const std::string& text) {
-  json given;
-  try {
-    given = json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw UsageError(std::string("--options is not valid JSON: ") + e.what());
+// Writes to --out (its extension picks the format) or standard output (JSON).
+void write_output(const std::string& path, const std::function<std::string()>& glb, const json& answer) {
+  if (path.empty() || path == "-") {
+    std::cout << answer.dump(2) << "\n";
+    return;
   }
-  if (!given.is_object()) throw UsageError("--options must be a JSON object");
-  return given;
-}
-
-CommandLine parse_command_line(int argc, char** argv) {
-  CommandLine cl;
-  if (argc >= 2 && std::string(argv[1]) == "options") {
-    cl.command = "options";
-    return cl;
-  }
-  if (argc < 3) throw UsageError("expected a command and a mesh");
-  cl.command = argv[1];
-  if (cl.command != "detect" && cl.command != "info" && cl.command != "segment")
-    throw UsageError("unknown command \"" + cl.command + "\"");
-  cl.mesh_path = argv[2];
-  // The server's default limits (--max-upload-mb 256, --cache-mb 1024): a mesh the server would
-  // refuse is refused here too, before a small glTF file can expand into gigabytes.
-  cl.read_options = featureline::read_limits_for(std::size_t(256) << 20, std::size_t(1) << 30);
-  cl.read_options.max_file_bytes = featureline::ReadMeshOptions{}.max_file_bytes;
-  for (int i = 3; i < argc; ++i) {
-    const std::string flag = argv[i];
-    const std::function<std::string()> value = [&]() -> std::string {
-      if (i + 1 >= argc) throw UsageError(flag + " needs a value");
-      return argv[++i];
-    };
-    if (flag == "--keys") cl.keys_text = value();
-    else if (flag == "--loop") cl.segment_lines.emplace_back(value(), true);
-    else if (flag == "--line") cl.segment_lines.emplace_back(value(), false);
-    else if (flag == "--closed") cl.closed = true;
-    else if (flag == "--weights") {
-      const auto w = parse_numbers(value(), 4, "--weights");
-      cl.line_flags["weights"] = {{"alpha", w[0]}, {"beta", w[1]}, {"gamma", w[2]}, {"delta", w[3]}};
-    } else if (flag == "--options") cl.line_options = parse_options_flag(value());
-    else if (flag == "--out") cl.out_path = value();
-    else if (flag == "--max-triangles") cl.read_options.max_triangles = parse_count(value(), "--max-triangles");
-    else if (flag == "--max-vertices") cl.read_options.max_vertices = parse_count(value(), "--max-vertices");
-    else if (flag == "-h" || flag == "--help") throw UsageError("");
-    else if (!table_flag(featureline::feature_line_option_table(), flag, value, cl.line_flags) &&
-             !table_flag(featureline::segmentation_option_table(), flag, value, cl.segmentation_flags) &&
-             !table_flag(featureline::curvature_option_table(), flag, value, cl.curvature_flags))
-      throw UsageError("unknown option \"" + flag + "\"");
-  }
-  return cl;
-}
-
-// Writes `text` to `path`, whose extension must be .json or .glb (`glb` / `json_text` make each).
-void write_output(const std::string& path, const std::function<std::string()>& glb, const std::function<std::string()>& json_text) {
   std::string content;
-  if (ends_with(path, ".glb")) content = glb();
-  else if (ends_with(path, ".json")) content = json_text() + "\n";
-  else throw UsageError("--out must end in .json or .glb");
+  if (ends_with(path, ".glb") && glb) content = glb();
+  else if (ends_with(path, ".json")) content = answer.dump(2) + "\n";
+  else throw CLI::ValidationError(std::string("--out must end in .json") + (glb ? " or .glb" : "") + " (or be - for standard output)");
   std::ofstream out(path, std::ios::binary);
   if (!out) throw std::runtime_error("cannot write " + path);
   out << content;
   if (!out) throw std::runtime_error("failed writing " + path);
 }
 
-featureline::FeatureLineRequest line_request(const CommandLine& cl, const std::string& keys, bool closed) {
-  featureline::FeatureLineRequest request;
-  request.keys = featureline::parse_key_list(keys);
-  request.closed = closed;
-  json options = cl.line_options;
-  options.merge_patch(cl.line_flags);  // flags win
-  featureline::apply_options_json(options, request.options);
-  return request;
+Answer detect(const featureline::PreparedMesh& mesh, const LineFlags& f) {
+  bool batch = false;
+  const auto requests = featureline::parse_feature_line_body(feature_line_body(f), mesh, batch);
+  std::vector<featureline::FeatureLineResult> results;
+  for (const auto& request : requests) results.push_back(featureline::detect_feature_line(mesh, request));
+  json answer;
+  if (batch) {
+    answer = {{"lines", json::array()}};
+    for (const auto& r : results) answer["lines"].push_back(featureline::feature_line_to_json(r));
+  } else {
+    answer = featureline::feature_line_to_json(results[0]);
+  }
+  return {answer, [&mesh, results] { return featureline::feature_line_to_glb(mesh, results, /*include_mesh=*/true); }};
 }
 
-int segment(const CommandLine& cl, const featureline::PreparedMesh& mesh) {
-  if (cl.segment_lines.empty()) throw UsageError("segment needs at least one --loop or --line");
-  featureline::SegmentationOptions options;
-  featureline::apply_options(featureline::segmentation_option_table(), cl.segmentation_flags, "", options);
-  std::vector<featureline::FeatureLineResult> lines;
-  for (const auto& [keys, is_closed] : cl.segment_lines)
-    lines.push_back(featureline::detect_feature_line(mesh, line_request(cl, keys, is_closed)));
+Answer segment(const featureline::PreparedMesh& mesh, const LineFlags& f) {
+  const json body = segmentation_body(f);
+  const auto options = featureline::parse_segmentation_options(body);
+  if (!body.contains("lines")) throw InvalidInputError("\"lines\" is required");
+  const auto lines = featureline::resolve_segmentation_lines(
+      body["lines"], mesh, [&](const json& item, const std::string& where) { return featureline::parse_line_request(item, mesh, where); },
+      [&](const std::vector<featureline::FeatureLineRequest>& requests) {
+        std::vector<featureline::FeatureLineResult> results;
+        for (const auto& request : requests) results.push_back(featureline::detect_feature_line(mesh, request));
+        return results;
+      });
   const auto parts = featureline::segment_mesh(mesh, lines, options);
-  const auto parts_json = [&] { return featureline::segmentation_to_json(parts, options.mode).dump(2); };
-  if (cl.out_path.empty()) std::cout << parts_json() << "\n";
-  else write_output(cl.out_path, [&] { return featureline::segmentation_to_glb(mesh, parts); }, parts_json);
-  return 0;
+  return {featureline::segmentation_to_json(parts, options.mode), [&mesh, parts] { return featureline::segmentation_to_glb(mesh, parts); }};
 }
 
-int detect(const CommandLine& cl, const featureline::PreparedMesh& mesh) {
-  if (cl.keys_text.empty()) throw UsageError("detect needs --keys");
-  const auto result = featureline::detect_feature_line(mesh, line_request(cl, cl.keys_text, cl.closed));
-  const auto line_json = [&] { return featureline::feature_line_to_json(result).dump(2); };
-  if (cl.out_path.empty()) std::cout << line_json() << "\n";
-  else write_output(cl.out_path, [&] { return featureline::feature_line_to_glb(mesh, {result}, /*include_mesh=*/true); }, line_json);
-  return 0;
+// Runs `command` on each mesh: one mesh prints its answer; several print a JSON array of
+// {"mesh", "result" | "error"} and fail (exit 1) if any mesh did.
+int for_each_mesh(const Inputs& in, const std::string& out_path,
+                  const std::function<Answer(const featureline::PreparedMesh&, double load_ms)>& command) {
+  if (in.meshes.size() == 1) {
+    double load_ms = 0;
+    const auto mesh = prepare(in.meshes[0], in, load_ms);
+    const Answer answer = command(*mesh, load_ms);
+    write_output(out_path, answer.glb, answer.body);
+    return 0;
+  }
+  if (!out_path.empty() && out_path != "-") throw CLI::ValidationError("--out takes one mesh; several print a JSON array");
+  if (std::count(in.meshes.begin(), in.meshes.end(), "-") > 0) throw CLI::ValidationError("- (standard input) takes one mesh");
+  json all = json::array();
+  int status = 0;
+  for (const auto& path : in.meshes) {
+    try {
+      double load_ms = 0;
+      const auto mesh = prepare(path, in, load_ms);
+      all.push_back({{"mesh", path}, {"result", command(*mesh, load_ms).body}});
+    } catch (const featureline::Error& e) {
+      all.push_back({{"mesh", path}, {"error", e.what()}});
+      status = 1;
+    }
+  }
+  std::cout << all.dump(2) << "\n";
+  return status;
 }
 
-int run(int argc, char** argv) {
-  const CommandLine cl = parse_command_line(argc, argv);
-  if (cl.command == "options") {
-    std::cout << featureline::describe_api_options().dump(2) << "\n";
-    return 0;
+// ---- the program --------------------------------------------------------------------------------
+
+struct Program {
+  CLI::App app{"featureline: smooth feature lines on triangle meshes (ridges, valleys, creases), from the command line",
+               "featureline"};
+  Inputs in;
+  LineFlags line;
+  std::function<int()> run;
+
+  Program() {
+    app.set_version_flag("--version", std::string("featureline ") + FEATURELINE_VERSION);
+    app.require_subcommand(1);
+    app.footer("Run 'featureline COMMAND --help' for a command's flags. Docs: docs/cli.md");
+    // The server's default limits (--max-upload-mb 256, --cache-mb 1024): a mesh the server would
+    // refuse is refused here too, before a small glTF file can expand into gigabytes.
+    in.limits = featureline::read_limits_for(std::size_t(256) << 20, std::size_t(1) << 30);
+    in.limits.max_file_bytes = featureline::ReadMeshOptions{}.max_file_bytes;
+    add_detect();
+    add_segment();
+    add_info();
+    auto* options = app.add_subcommand("options", "Every request option with its type, default, limits and description (JSON)");
+    options->callback([this] {
+      run = [] {
+        std::cout << featureline::describe_api_options().dump(2) << "\n";
+        return 0;
+      };
+    });
   }
-  featureline::PrepareOptions prepare_options;
-  featureline::apply_options(featureline::curvature_option_table(), cl.curvature_flags, "", prepare_options.curvature);
-  const auto load_start = std::chrono::steady_clock::now();
-  featureline::RawMesh raw = featureline::read_mesh_file(cl.mesh_path, cl.read_options);
-  const double load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start).count();
-  const auto mesh = featureline::prepare_mesh(std::move(raw), prepare_options);
-  if (cl.command == "info") {
-    std::cout << featureline::mesh_info_to_json(*mesh, load_ms).dump(2) << "\n";
-    return 0;
+
+  void add_detect() {
+    auto* detect_command = app.add_subcommand("detect", "Detect a feature line through key vertices (or points)");
+    add_inputs(*detect_command, in, true);
+    add_line_flags(*detect_command, line);
+    detect_command->add_option("--out", line.out_path, "Write FILE.json or FILE.glb (line and mesh) instead of printing JSON")
+        ->type_name("FILE");
+    detect_command->callback([this] {
+      run = [this] { return for_each_mesh(in, line.out_path, [this](const auto& mesh, double) { return detect(mesh, line); }); };
+    });
   }
-  return cl.command == "segment" ? segment(cl, *mesh) : detect(cl, *mesh);
-}
+
+  void add_segment() {
+    auto* segment_command = app.add_subcommand("segment", "Cut a mesh into parts along closed lines (and open lines between them)");
+    add_inputs(*segment_command, in, false);
+    segment_command->add_option("--loop", line.loops, "Keys of a closed line (repeatable)")->type_name("LIST");
+    segment_command->add_option("--line", line.open_lines, "Keys of an open line ending on the boundary or another line (repeatable)")
+        ->type_name("LIST");
+    segment_command->add_option("--request", line.request_path,
+                                "A request body of POST /v1/meshes/{id}/segmentation, FILE or - for standard input")
+        ->type_name("FILE");
+    segment_command->add_option("--weights", line.weights, "Marching weights of every line")->expected(4)->delimiter(',')->type_name("A,B,G,D");
+    segment_command->add_option("--options", line.options_text, "Options of every line, as a JSON object")->type_name("JSON");
+    add_table_flags(*segment_command, featureline::feature_line_option_table(), line.options, "Feature-line options (every line)");
+    add_table_flags(*segment_command, featureline::segmentation_option_table(), line.segmentation, "Segmentation options");
+    segment_command->add_option("--out", line.out_path, "Write parts.glb (one primitive per part) or labels.json")->type_name("FILE");
+    segment_command->callback([this] {
+      run = [this] { return for_each_mesh(in, line.out_path, [this](const auto& mesh, double) { return segment(mesh, line); }); };
+    });
+  }
+
+  void add_info() {
+    auto* info = app.add_subcommand("info", "Describe meshes: counts, components, curvature, creases, timings");
+    add_inputs(*info, in, true);
+    info->callback([this] {
+      run = [this] {
+        return for_each_mesh(in, "", [](const auto& mesh, double load_ms) {
+          return Answer{featureline::mesh_info_to_json(mesh, load_ms), nullptr};
+        });
+      };
+    });
+  }
+};
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  Program program;
   try {
-    return run(argc, argv);
-  } catch (const UsageError& e) {
-    if (std::strlen(e.what()) > 0) std::cerr << "featureline: " << e.what() << "\n";
-    std::cerr << usage();
+    program.app.parse(argc, argv);
+    return program.run();
+  } catch (const CLI::Success& e) {
+    return program.app.exit(e);  // --help, --version: standard output, exit 0
+  } catch (const CLI::ParseError& e) {
+    const auto given = program.app.get_subcommands();
+    const std::string help = given.empty() ? "featureline --help" : "featureline " + given[0]->get_name() + " --help";
+    std::cerr << "featureline: " << e.what() << "\nRun '" << help << "' for usage.\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "featureline: " << e.what() << "\n";

@@ -81,6 +81,16 @@ struct RawMesh {
 /// \throw UnsupportedFormatError, MeshFormatError, LimitExceededError
 RawMesh read_mesh(std::string_view bytes, MeshFormat format, const ReadMeshOptions& options = {});
 
+/// A mesh file's bytes and format, not parsed yet.
+struct MeshFile {
+  std::string bytes;
+  MeshFormat format = MeshFormat::obj;
+};
+
+/// Reads a mesh file's bytes (within options.max_file_bytes); the format comes from the
+/// extension, else from sniffing. \throw MeshFormatError, LimitExceededError, UnsupportedFormatError
+MeshFile read_mesh_file_bytes(const std::string& path, const ReadMeshOptions& options = {});
+
 /// Reads a mesh from a file; the format comes from the extension, else from sniffing.
 /// \throw as read_mesh, and MeshFormatError when the file cannot be opened.
 RawMesh read_mesh_file(const std::string& path, const ReadMeshOptions& options = {});

@@ -98,7 +98,7 @@ start_replica() {
   # nginx holds the clients and opens a connection per request in flight: each replica takes up
   # to 512 of them (256 workers) and still refuses engine work beyond its queue with 503.
   setsid "$server_bin" --host 127.0.0.1 --port "$p" --store "redis://127.0.0.1:$redis_port" \
-    --web-root "$root/web/dist" --max-upload-mb "$max_upload_mb" --http-threads 256 "${server_flags[@]}" \
+    --max-upload-mb "$max_upload_mb" --http-threads 256 "${server_flags[@]}" \
     </dev/null >"$state/logs/replica-$i.out" 2>>"$state/logs/replica-$i.log" &
   echo $! >"$state/pids/replica-$i.pid"
 }
@@ -147,7 +147,6 @@ status() {
 up() {
   command -v "$nginx_bin" >/dev/null || die "no nginx at $nginx_bin (scripts/setup.sh installs it)"
   command -v "$redis_bin" >/dev/null || die "no redis-server at $redis_bin (scripts/setup.sh installs it)"
-  [ -f "$root/web/dist/index.html" ] || die "no built page in web/dist (scripts/setup.sh builds it)"
   if [ "$wipe" = 1 ]; then
     [ -z "$(pid_of redis redis-server)" ] || die "--wipe needs the cluster down first"
     rm -rf "$state/redis"

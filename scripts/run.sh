@@ -16,13 +16,14 @@ port=${PORT:-8080}
 # Uploads are kept on disk, so sessions survive restarts (DATA_DIR=... for another folder).
 data_dir=${DATA_DIR:-${XDG_STATE_HOME:-$HOME/.local/state}/featureline/data}
 mkdir -p "$data_dir"
-"$build/server/featureline-server" --port "$port" --preload "$sample" --web-root web/dist --data-dir "$data_dir" | while IFS= read -r line; do
+sample_path="$PWD/$sample"
+"$build/server/featureline-server" --port "$port" --preload "$sample" --data-dir "$data_dir" | while IFS= read -r line; do
   echo "$line"
   case "$line" in
     "preloaded "*)
       id=${line##* }
       echo "  curl -s -X POST http://127.0.0.1:$port/v1/meshes/$id/feature-lines -H 'Content-Type: application/json' -d '{\"keys\": [${keys//,/, }]}'"
-      echo "  curl -s --data-binary @your-mesh.obj -H 'Content-Type: application/octet-stream' http://127.0.0.1:$port/v1/meshes"
+      echo "  curl -s --data-binary @$sample_path -H 'Content-Type: application/octet-stream' http://127.0.0.1:$port/v1/meshes"
       ;;
   esac
 done

@@ -8,8 +8,13 @@ cd "$(dirname "$0")/.."
 
 packages=(g++ cmake ninja-build pkg-config git ca-certificates
   libopenmesh-dev libeigen3-dev libcpp-httplib-dev nlohmann-json3-dev libtinygltf-dev libdraco-dev
-  libgtest-dev jq curl chromium zlib1g-dev iproute2 libnanoflann-dev
-  nginx redis-server libhiredis-dev python3-yaml)
+  libgtest-dev libcli11-dev jq curl zlib1g-dev libnanoflann-dev libhiredis-dev help2man)
+# What only the tests use (scripts/test.sh sets FEATURELINE_TEST_TOOLS=1): the browser, the
+# cluster's nginx and Redis, the deployment files' YAML check, ss for free ports, what CPack
+# reads the .deb's dependencies with (dpkg-shlibdeps, file).
+if [ "${FEATURELINE_TEST_TOOLS:-0}" = 1 ]; then
+  packages+=(chromium nginx redis-server python3-yaml iproute2 dpkg-dev file)
+fi
 # The fuzz build (scripts/test.sh, scripts/fuzz.sh) compiles with clang and links libFuzzer.
 case " $* " in *clang*) packages+=(clang libclang-rt-14-dev) ;; esac
 missing=()
@@ -46,4 +51,3 @@ fi
 build=${BUILD_DIR:-build}
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
 cmake --build "$build" -j "$(nproc)"
-node web/build.mjs web/dist >/dev/null  # the browser page the server serves at /

@@ -4,15 +4,17 @@
 # summary line for each.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+export FEATURELINE_TEST_TOOLS=1
 scripts/setup.sh
 status=0
 echo "== ctest (Release)"
 ctest --test-dir "${BUILD_DIR:-build}" --output-on-failure -j "$(nproc)" || status=1
 echo "== ctest (ASan + UBSan)"
 BUILD_DIR=build-sanitize scripts/setup.sh -DFEATURELINE_SANITIZE=ON -DFEATURELINE_BUILD_BENCH=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo
-# The browser test runs once, against the Release server (it drives Chromium, not our code).
+# The browser tests run once, against the Release server (they drive Chromium, not our code);
+# the first-contact tests run scripts/run.sh and the installed programs, which are Release builds.
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-  ctest --test-dir build-sanitize --output-on-failure -j "$(nproc)" -LE web || status=1
+  ctest --test-dir build-sanitize --output-on-failure -j "$(nproc)" -LE "web|first_contact" || status=1
 echo "== fuzzing (libFuzzer + ASan + UBSan): every harness over its seeds and a fixed number of mutations"
 # scripts/fuzz.sh NAME SECONDS runs one harness for longer.
 BUILD_DIR=build-fuzz scripts/setup.sh -DCMAKE_CXX_COMPILER=clang++ -DFEATURELINE_FUZZ=ON -DFEATURELINE_SANITIZE=ON \

@@ -3,100 +3,100 @@
 #include <signal.h>
 
 #include <cstdio>
-#include <cstring>
 #include <iostream>
 #include <string>
 #include <thread>
 
+#include <CLI/CLI.hpp>
+
+#include "featureline_version.h"
 #include "server/server.h"
 
 namespace {
 
-const char* const kUsage = R"(usage: featureline-server [options]
-  --host H            address to bind (default 127.0.0.1, loopback only)
-  --port P            port (default 8080; 0 picks a free one)
-  --threads N         engine threads (default: the machine's cores)
-  --queue N           engine jobs that may wait before requests get 503 (default 256)
-  --http-threads N    connection workers (default 64; each keep-alive connection holds one)
-  --cache-mb M        byte budget of prepared meshes (default 1024)
-  --ttl-s T           idle seconds before a mesh session expires (default 1800)
-  --max-upload-mb U   largest accepted upload (default 256)
-  --deadline-s S      longest a request may wait for the engine (default 30)
-  --max-connections C open connections (served + waiting for a worker); beyond, 503 at once
-                      (default 2 x --http-threads)
-  --head-timeout-s T  a request's headers must arrive within T s of its first byte (default 10)
-  --max-triangles N   an upload may expand to at most N triangles (glTF: over all node instances
-                      and primitives); default min(upload limit / 12 bytes, cache / 128 bytes)
-  --max-vertices N    the same for vertex records; same default
-  --upload-buffer-mb B  upload bodies being received, in total; beyond, 503 (default 2 x --max-upload-mb)
-  --cors-origin O     allow browser requests from origin O ("*" for any); repeatable
-  --preload FILE      load FILE at start and print its mesh id; repeatable
-  --web-root DIR      serve DIR at / (the browser front-end)
-  --data-dir DIR      keep every upload in DIR (atomic writes), so sessions survive eviction and
-                      restarts (a miss prepares the mesh again from the stored upload)
-  --store URL         where uploads are kept: redis://HOST:PORT[/DB] (shared by a cluster's
-                      replicas) or dir:PATH (as --data-dir); default: memory only
-  --store-max-mb M    a directory store holds at most M MiB of uploads; beyond, uploads get 503
-                      storage_full (Redis: its own maxmemory, with maxmemory-policy noeviction)
-  --port-file F       write the bound port to F once listening (for tests)
-  --quiet             no access log
-)";
+using featureline::server::ServerOptions;
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+// Every flag, with its range and default from ServerOptions.
+// A range check whose help reads "in [lo, hi]" (CLI11's own repeats the type).
+CLI::Validator within(double lo, double hi) {
+  return CLI::Range(lo, hi).description("in [" + std::to_string((long long)lo) + ", " + std::to_string((long long)hi) + "]");
+}
 
-long number(const std::string& text, const char* flag, long lo, long hi) {
-  try {
-    std::size_t used = 0;
-    const long v = std::stol(text, &used);
-    if (used == text.size() && v >= lo && v <= hi) return v;
-  } catch (const std::exception&) {
+void add_flags(CLI::App& app, ServerOptions& o, std::string& port_file) {
+  const auto count = [](double hi) { return within(1, hi); };
+  app.add_option("--host", o.host, "Address to bind (loopback by default; put a reverse proxy in front for the world)")
+      ->capture_default_str();
+  app.add_option("--port", o.port, "Port (0 picks a free one)")->check(within(0, 65535))->capture_default_str();
+  app.add_option("--threads", o.engine_threads, "Engine threads (default: the machine's cores)")->check(count(1024));
+  app.add_option("--queue", o.queue_capacity, "Engine jobs that may wait before requests get 503")
+      ->check(count(1e6))->capture_default_str();
+  app.add_option("--http-threads", o.http_threads, "Connection workers (each keep-alive connection holds one)")
+      ->check(within(2, 4096))->capture_default_str();
+  app.add_option("--cache-mb", o.cache_mb, "Byte budget of prepared meshes, MiB")->check(count(1 << 20))->capture_default_str();
+  app.add_option("--ttl-s", o.ttl_s, "Idle seconds before a mesh session expires")->check(count(365 * 86400))->capture_default_str();
+  app.add_option("--max-upload-mb", o.max_upload_mb, "Largest accepted upload, MiB")->check(count(1 << 16))->capture_default_str();
+  app.add_option("--deadline-s", o.deadline_s, "Longest a request may wait for the engine, s")->check(count(3600))->capture_default_str();
+  app.add_option("--max-connections", o.max_connections,
+                 "Open connections (served + waiting for a worker); beyond, 503 at once (default 2 x --http-threads)")
+      ->check(within(2, 1e6));
+  app.add_option("--head-timeout-s", o.head_timeout_s, "A request's headers must arrive within this many s of its first byte")
+      ->check(count(3600))->capture_default_str();
+  app.add_option("--max-triangles", o.max_triangles,
+                 "An upload may expand to at most N triangles (glTF: over all instances and primitives); "
+                 "default min(upload limit / 12 B, cache / 128 B)")
+      ->check(count(4e9));
+  app.add_option("--max-vertices", o.max_vertices, "The same for vertex records; same default")->check(count(4e9));
+  app.add_option("--upload-buffer-mb", o.upload_buffer_mb,
+                 "Upload bodies being received, in total, MiB; beyond, 503 (default 2 x --max-upload-mb)")
+      ->check(count(1 << 20));
+  app.add_option("--cors-origin", o.cors_origins, "Allow browser requests from this origin (\"*\" for any); repeatable");
+  app.add_option("--preload", o.preload, "Load FILE at start, keep it while the server runs, print its mesh id; repeatable")
+      ->check(CLI::ExistingFile);
+  app.add_option("--web-root", o.web_root, "Serve this folder at / instead of the page built into the binary")
+      ->check(CLI::ExistingDirectory);
+  app.add_flag("--no-page{false}", o.embedded_page, "Serve no page at / (API only)");
+  app.add_option_function<std::string>(
+         "--data-dir", [&o](const std::string& dir) { o.store = "dir:" + dir; },
+         "Keep every upload in DIR (atomic writes), so sessions survive eviction and restarts")
+      ->type_name("DIR");
+  app.add_option("--store", o.store,
+                 "Where uploads are kept: redis://HOST:PORT[/DB] (shared by a cluster's replicas) or dir:PATH; "
+                 "default: memory only");
+  app.add_option("--store-max-mb", o.store_max_mb, "A directory store holds at most this many MiB of uploads; beyond, 503")
+      ->check(count(1 << 24));
+  app.add_option("--port-file", port_file, "Write the bound port to this file once listening (for scripts)");
+  app.add_flag("--quiet{false}", o.access_log, "No access log");
+}
+
+void print_banner(const ServerOptions& options, int port, const std::vector<std::pair<std::string, std::string>>& preloaded) {
+  const std::string base = "http://" + options.host + ":" + std::to_string(port);
+  std::printf("featureline-server %s listening on %s\n", FEATURELINE_VERSION, base.c_str());
+  for (const auto& [path, id] : preloaded) {
+    std::printf("preloaded %s as mesh %s\n", path.c_str(), id.c_str());
+    std::printf("  curl -s %s/v1/meshes/%s\n", base.c_str(), id.c_str());
   }
-  throw UsageError(std::string(flag) + " expects an integer between " + std::to_string(lo) + " and " + std::to_string(hi));
+  if (!options.web_root.empty() || options.embedded_page) std::printf("open %s/\n", base.c_str());
+  std::printf("uploads kept %s\n", options.store.empty() ? "in memory only (a restart forgets them; see --data-dir)"
+                                                          : ("in " + options.store).c_str());
+  std::fflush(stdout);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  using featureline::server::ServerOptions;
   ServerOptions options;
   std::string port_file;
+  CLI::App app{"featureline-server: the Featureline HTTP service (feature lines on triangle meshes) and its page at /",
+               "featureline-server"};
+  app.set_version_flag("--version", std::string("featureline-server ") + FEATURELINE_VERSION);
+  app.footer("API: api/openapi.yaml (GET /v1/options lists every request option). Docs: docs/server.md");
+  add_flags(app, options, port_file);
   try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string flag = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw UsageError(flag + " needs a value");
-        return argv[++i];
-      };
-      if (flag == "--host") options.host = value();
-      else if (flag == "--port") options.port = int(number(value(), "--port", 0, 65535));
-      else if (flag == "--threads") options.engine_threads = std::size_t(number(value(), "--threads", 1, 1024));
-      else if (flag == "--queue") options.queue_capacity = std::size_t(number(value(), "--queue", 1, 1000000));
-      else if (flag == "--http-threads") options.http_threads = std::size_t(number(value(), "--http-threads", 2, 4096));
-      else if (flag == "--cache-mb") options.cache_mb = std::size_t(number(value(), "--cache-mb", 1, 1 << 20));
-      else if (flag == "--ttl-s") options.ttl_s = int(number(value(), "--ttl-s", 1, 365 * 86400));
-      else if (flag == "--max-upload-mb") options.max_upload_mb = std::size_t(number(value(), "--max-upload-mb", 1, 1 << 16));
-      else if (flag == "--deadline-s") options.deadline_s = double(number(value(), "--deadline-s", 1, 3600));
-      else if (flag == "--max-connections") options.max_connections = std::size_t(number(value(), "--max-connections", 2, 1000000));
-      else if (flag == "--head-timeout-s") options.head_timeout_s = double(number(value(), "--head-timeout-s", 1, 3600));
-      else if (flag == "--max-triangles") options.max_triangles = std::size_t(number(value(), "--max-triangles", 1, 4000000000L));
-      else if (flag == "--max-vertices") options.max_vertices = std::size_t(number(value(), "--max-vertices", 1, 4000000000L));
-      else if (flag == "--upload-buffer-mb") options.upload_buffer_mb = std::size_t(number(value(), "--upload-buffer-mb", 1, 1 << 20));
-      else if (flag == "--cors-origin") options.cors_origins.push_back(value());
-      else if (flag == "--preload") options.preload.push_back(value());
-      else if (flag == "--web-root") options.web_root = value();
-      else if (flag == "--data-dir") options.store = "dir:" + value();
-      else if (flag == "--store") options.store = value();
-      else if (flag == "--store-max-mb") options.store_max_mb = std::size_t(number(value(), "--store-max-mb", 1, 1 << 24));
-      else if (flag == "--port-file") port_file = value();
-      else if (flag == "--quiet") options.access_log = false;
-      else if (flag == "-h" || flag == "--help") throw UsageError("");
-      else throw UsageError("unknown option \"" + flag + "\"");
-    }
-  } catch (const UsageError& e) {
-    if (std::strlen(e.what()) > 0) std::cerr << "featureline-server: " << e.what() << "\n";
-    std::cerr << kUsage;
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);  // --help, --version: stdout, exit 0
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "featureline-server: " << e.what() << "\nRun 'featureline-server --help' for the options.\n";
     return 2;
   }
 
@@ -111,9 +111,10 @@ int main(int argc, char** argv) {
 
   try {
     featureline::server::FeaturelineServer server(options);
+    // Bound before preloading, so a port in use fails at once rather than after the loads.
+    const int port = server.bind();
     std::vector<std::pair<std::string, std::string>> preloaded;
     for (const auto& path : options.preload) preloaded.emplace_back(path, server.preload(path));
-    const int port = server.bind();
     std::thread signal_thread([&server, stop_signals] {
       int received = 0;
       sigwait(&stop_signals, &received);
@@ -121,16 +122,7 @@ int main(int argc, char** argv) {
       server.stop();
     });
     signal_thread.detach();
-    const std::string base = "http://" + options.host + ":" + std::to_string(port);
-    std::printf("featureline-server listening on %s\n", base.c_str());
-    for (const auto& [path, id] : preloaded) {
-      std::printf("preloaded %s as mesh %s\n", path.c_str(), id.c_str());
-      std::printf("  curl -s %s/v1/meshes/%s\n", base.c_str(), id.c_str());
-    }
-    if (!options.web_root.empty()) std::printf("open %s/\n", base.c_str());
-    std::printf("uploads kept %s\n", options.store.empty() ? "in memory only (a restart forgets them; see --data-dir)"
-                                                            : ("in " + options.store).c_str());
-    std::fflush(stdout);
+    print_banner(options, port, preloaded);
     if (!port_file.empty()) {
       std::FILE* f = std::fopen(port_file.c_str(), "w");
       if (f == nullptr) throw std::runtime_error("cannot write " + port_file);

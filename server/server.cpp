@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
@@ -33,6 +34,7 @@
 #include "server/session_cache.h"
 #include "server/transport.h"
 #include "server/upload_store.h"
+#include "server/web_assets.h"
 #include "server/work_pool.h"
 
 namespace featureline::server {
@@ -212,6 +214,12 @@ struct FeaturelineServer::Impl {
     // Headers and body go out in separate writes: without TCP_NODELAY, Nagle's algorithm
     // holds the body until the client's delayed ACK (about 40 ms per response, measured).
     http.set_tcp_nodelay(true);
+    // httplib's default also sets SO_REUSEPORT, which lets a second server bind a port in use
+    // and share its connections; SO_REUSEADDR alone still allows a restart over TIME_WAIT.
+    http.set_socket_options([](socket_t sock) {
+      int yes = 1;
+      setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, reinterpret_cast<const void*>(&yes), sizeof yes);
+    });
     // Only for the Keep-Alive header httplib writes: the transport applies these itself.
     http.set_keep_alive_max_count(http.limits().keep_alive_max_requests);
     http.set_keep_alive_timeout(std::time_t(http.limits().idle_timeout_s));
@@ -447,8 +455,26 @@ struct FeaturelineServer::Impl {
         res.set_header("Access-Control-Max-Age", "600");
       }
     }));
-    if (!options.web_root.empty() && !http.set_mount_point("/", options.web_root))
-      throw std::runtime_error("cannot serve the web page folder " + options.web_root);
+    // The page: a folder given with --web-root, else the copy compiled into the binary.
+    if (!options.web_root.empty()) {
+      if (!http.set_mount_point("/", options.web_root))
+        throw std::runtime_error("cannot serve the web page folder " + options.web_root);
+    } else if (options.embedded_page) {
+      http.Get("/(.*)", guarded("/{page}", [](const auto& req, auto& res) { serve_embedded_page(req, res); }));
+    }
+  }
+
+  static void serve_embedded_page(const httplib::Request& req, httplib::Response& res) {
+    const WebAsset* asset = find_web_asset(req.path);
+    if (asset == nullptr) throw HttpError(404, "not_found", "nothing at " + quote_client_text(req.path));
+    res.set_header("ETag", std::string(asset->etag));
+    // Revalidated on every load (the next build of the page must show at once); 304 when unchanged.
+    res.set_header("Cache-Control", "no-cache");
+    if (req.get_header_value("If-None-Match") == asset->etag) {
+      res.status = 304;
+      return;
+    }
+    res.set_content(asset->bytes.data(), asset->bytes.size(), web_content_type(asset->path));
   }
 
   // ---- handlers ----------------------------------------------------------------------------
@@ -702,9 +728,15 @@ FeaturelineServer::~FeaturelineServer() = default;
 int FeaturelineServer::bind() {
   const auto& o = impl_->options;
   int port = o.port;
+  errno = 0;
   if (port == 0) port = impl_->http.bind_to_any_port(o.host);
   else if (!impl_->http.bind_to_port(o.host, port)) port = -1;
-  if (port <= 0) throw std::runtime_error("cannot listen on " + o.host + ":" + std::to_string(o.port));
+  if (port <= 0) {
+    const std::string reason = errno == EADDRINUSE ? ": the port is already in use (--port picks another)"
+                               : errno != 0        ? std::string(": ") + std::strerror(errno)
+                                                   : "";
+    throw std::runtime_error("cannot listen on " + o.host + ":" + std::to_string(o.port) + reason);
+  }
   impl_->http.widen_backlog();
   return port;
 }
@@ -714,15 +746,16 @@ bool FeaturelineServer::run() { return impl_->http.listen_after_bind(); }
 void FeaturelineServer::stop() { impl_->http.stop_gracefully(); }
 
 std::string FeaturelineServer::preload(const std::string& path) {
-  const auto t0 = Clock::now();
-  RawMesh raw = read_mesh_file(path);
-  MeshSession s;
-  s.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  s.format = raw.format;
-  s.mesh = prepare_mesh(std::move(raw));
-  s.bytes = s.mesh->memory_bytes();
+  // Stored like an upload, so the printed id answers through a data dir or Redis store too
+  // (and after a restart, until the store expires it).
+  MeshFile file = read_mesh_file_bytes(path, impl_->read_limits);
+  StoredUpload upload;
+  upload.bytes = std::move(file.bytes);
+  upload.format = file.format;
+  upload.uploaded_at_unix_s = std::int64_t(std::time(nullptr));
+  MeshSession s = prepare_session(upload.bytes, upload.format, impl_->read_limits, nullptr);
   s.pinned = true;  // the bundled sample stays available however long the server runs
-  auto stored = impl_->cache.insert(std::move(s));
+  auto stored = impl_->sessions.create(std::move(s), upload);
   if (!stored) throw std::runtime_error(path + " is larger than the whole cache budget");
   return (*stored)->id;
 }

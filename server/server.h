@@ -31,7 +31,8 @@ struct ServerOptions {
   std::vector<std::string> cors_origins;  ///< allowed browser origins ("*" for any); none by default
   std::vector<std::string> preload;       ///< meshes loaded at start (their ids are printed)
   bool access_log = true;                 ///< one line per request on stderr
-  std::string web_root;                   ///< folder served at / (empty: none)
+  std::string web_root;                   ///< folder served at / instead of the page built into the binary
+  bool embedded_page = true;              ///< serve the built-in page at / when web_root is empty
   /// Where uploads are kept so sessions survive eviction and restarts (server/upload_store.h):
   /// a folder ("dir:PATH" or PATH), "redis://HOST:PORT[/DB]", or empty for memory only.
   std::string store;

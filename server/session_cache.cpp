@@ -166,7 +166,8 @@ DurableSessions::Found DurableSessions::find(const std::string& id) {
   SessionCache::Miss miss = SessionCache::Miss::unknown;
   found.session = cache_.find(id, &miss);
   if (found.session) {
-    if (still_stored(id)) return found;
+    // A preloaded mesh stays while the server runs, even if the store expires its copy.
+    if (found.session->pinned || still_stored(id)) return found;
     // Deleted or expired in the store by another replica: the cached copy goes too.
     cache_.erase(id);
     found.session = nullptr;

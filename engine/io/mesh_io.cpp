@@ -187,7 +187,7 @@ RawMesh read_mesh(std::string_view bytes, MeshFormat format, const ReadMeshOptio
   return mesh;
 }
 
-RawMesh read_mesh_file(const std::string& path, const ReadMeshOptions& options) {
+MeshFile read_mesh_file_bytes(const std::string& path, const ReadMeshOptions& options) {
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
   if (ec || !std::filesystem::exists(status)) throw MeshFormatError("Cannot open mesh file '" + path + "': it does not exist.");
@@ -202,7 +202,9 @@ RawMesh read_mesh_file(const std::string& path, const ReadMeshOptions& options) 
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw MeshFormatError("Cannot open mesh file '" + path + "'.");
-  std::string bytes(static_cast<std::size_t>(size), '\0');
+  MeshFile file;
+  std::string& bytes = file.bytes;
+  bytes.assign(static_cast<std::size_t>(size), '\0');
   in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   if (in.gcount() != static_cast<std::streamsize>(bytes.size())) {
     throw MeshFormatError("Cannot read mesh file '" + path + "': it ended early.");
@@ -213,7 +215,13 @@ RawMesh read_mesh_file(const std::string& path, const ReadMeshOptions& options) 
     throw UnsupportedFormatError("Cannot tell the format of mesh file '" + path +
                                  "' from its extension or content (supported: " + supported_formats() + ").");
   }
-  return read_mesh(bytes, *format, options);
+  file.format = *format;
+  return file;
+}
+
+RawMesh read_mesh_file(const std::string& path, const ReadMeshOptions& options) {
+  const MeshFile file = read_mesh_file_bytes(path, options);
+  return read_mesh(file.bytes, file.format, options);
 }
 
 }  // namespace featureline

@@ -26,8 +26,9 @@ check "unknown --curvature exits 2" [ $rc = 2 ]
 check "unknown --curvature: the error comes first, then the usage" [ "$(head -n 1 "$tmp/err")" = "featureline: --curvature must be jet or cotangent" ]
 check "unknown --curvature: nothing on stdout" [ ! -s "$tmp/out" ]
 "$FEATURELINE" info "$mesh" --curvature-radius 20 >"$tmp/out" 2>"$tmp/err"; rc=$?
-check "--curvature-radius out of range exits 1" [ $rc = 1 ]
-check "--curvature-radius out of range: one line" [ "$(wc -l <"$tmp/err")" = 1 ]
+check "--curvature-radius out of range is a usage error (exit 2)" [ $rc = 2 ]
+check "--curvature-radius out of range: the range, then a pointer to --help" \
+  [ "$(cat "$tmp/err")" = "$(printf '%s\n%s' 'featureline: "--curvature-radius" must be a number from 0 to 12' "Run 'featureline info --help' for usage.")" ]
 
 "$FEATURELINE" detect "$mesh" --keys 10,200,400 >"$tmp/line.json" 2>"$tmp/err"; rc=$?
 check "detect exits 0" [ $rc = 0 ]
@@ -46,7 +47,7 @@ check "--out .glb writes a GLB" [ $rc = 0 ] && check "GLB magic" [ "$(head -c 4 
 
 "$FEATURELINE" detect "$mesh" --keys 10,99999999 >"$tmp/out" 2>"$tmp/err"; rc=$?
 check "out-of-range key exits 1" [ $rc = 1 ]
-check "out-of-range key: one clear line" [ "$(cat "$tmp/err")" = "featureline: key 1 is vertex 99999999, but the mesh has only 6475 vertices" ]
+check "out-of-range key: one clear line" [ "$(cat "$tmp/err")" = "featureline: request.keys[1] is vertex 99999999, but the mesh has only 6475 vertices" ]
 check "nothing on stdout on error" [ ! -s "$tmp/out" ]
 
 "$FEATURELINE" detect "$tmp/missing.obj" --keys 1,2 >"$tmp/out" 2>"$tmp/err"; rc=$?
@@ -55,7 +56,9 @@ check "missing file: one line" [ "$(wc -l <"$tmp/err")" = 1 ]
 
 "$FEATURELINE" detect "$mesh" --keys 1,2 --bogus >"$tmp/out" 2>"$tmp/err"; rc=$?
 check "unknown flag exits 2" [ $rc = 2 ]
-check "unknown flag named" grep -q 'unknown option "--bogus"' "$tmp/err"
+check "unknown flag named" grep -q 'not expected: --bogus' "$tmp/err"
+check "a usage error is two lines: what, and where help is" [ "$(wc -l <"$tmp/err")" = 2 ]
+check "the pointer names the command's help" [ "$(tail -n 1 "$tmp/err")" = "Run 'featureline detect --help' for usage." ]
 
 "$FEATURELINE" detect "$mesh" --keys 1,2 --options '{"snake": {"alpah": 1}}' >"$tmp/out" 2>"$tmp/err"; rc=$?
 check "misspelt JSON option exits 1" [ $rc = 1 ]
@@ -76,4 +79,43 @@ check "a line that closes nothing exits 1" [ $rc = 1 ]
 check "and says so" grep -q "close no region" "$tmp/err"
 "$FEATURELINE" segment "$sample" --loop 700,705,750 --mode sideways >"$tmp/out" 2>"$tmp/err"; rc=$?
 check "unknown --mode exits 2" [ $rc = 2 ]
+# Conventions: help and version on standard output with exit 0, for the program and each command.
+"$FEATURELINE" --help >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "--help exits 0" [ $rc = 0 ]
+check "--help prints the commands on stdout" grep -q "detect" "$tmp/out"
+check "--help writes nothing on stderr" [ ! -s "$tmp/err" ]
+for command in detect segment info options; do
+  "$FEATURELINE" $command --help >"$tmp/out" 2>"$tmp/err"; rc=$?
+  check "$command --help exits 0 with its usage on stdout" [ $rc = 0 ] && check "$command --help: usage line" grep -q "^Usage: featureline $command" "$tmp/out"
+done
+version=$("$FEATURELINE" --version); rc=$?
+check "--version exits 0" [ $rc = 0 ]
+spec_version=$(sed -n 's/^  version: \(.*\)$/\1/p' "$(dirname "$0")/../../api/openapi.yaml")
+check "--version is the OpenAPI spec's version" [ "$version" = "featureline $spec_version" ]
+"$FEATURELINE" >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "no command: exit 2" [ $rc = 2 ] && check "no command: two lines on stderr" [ "$(wc -l <"$tmp/err")" = 2 ]
+
+# Standard input, point keys, request files, several meshes.
+"$FEATURELINE" info - <"$mesh" >"$tmp/stdin.json"; rc=$?
+check "info - reads standard input" [ $rc = 0 ] && check "info - counts fandisk's vertices" [ "$(jq .vertices "$tmp/stdin.json")" = 6475 ]
+"$FEATURELINE" info - --format ply <"$mesh" >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "--format ply on an OFF file is refused (exit 1)" [ $rc = 1 ]
+p10=$(jq -c '.initial.points[0]|map(tostring)|join(",")' -r "$tmp/line.json")
+p400=$(jq -c '.initial.points[-1]|map(tostring)|join(",")' -r "$tmp/line.json")
+"$FEATURELINE" detect "$mesh" --points "$p10;$p400" >"$tmp/points.json"; rc=$?
+check "--points: a vertex's own position selects that vertex" [ "$(jq -c .keys "$tmp/points.json")" = "[10,400]" ]
+"$FEATURELINE" detect "$mesh" --points "1,2;3" >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "--points with a pair: exit 2" [ $rc = 2 ] && check "and names it" grep -q 'not "1,2"' "$tmp/err"
+echo '{"lines": [{"keys": [10, 200]}, {"keys": [{"point": ['"$(jq -c '.initial.points[0]|map(tostring)|join(",")' -r "$tmp/line.json")"']}, 400], "closed": false}]}' >"$tmp/request.json"
+"$FEATURELINE" detect "$mesh" --request "$tmp/request.json" >"$tmp/batch.json"; rc=$?
+check "--request with two lines exits 0" [ $rc = 0 ]
+check "--request answers {lines} as the HTTP API does" [ "$(jq -c '[.lines[].keys]' "$tmp/batch.json")" = "[[10,200],[10,400]]" ]
+"$FEATURELINE" detect "$mesh" --request - <"$tmp/request.json" >"$tmp/batch2.json"; rc=$?
+check "--request - reads standard input" cmp -s <(jq -S '[.lines[].refined.points]' "$tmp/batch.json") <(jq -S '[.lines[].refined.points]' "$tmp/batch2.json")
+"$FEATURELINE" detect "$mesh" --keys 10,200,400 --request "$tmp/request.json" >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "--keys with --request: exit 2" [ $rc = 2 ]
+"$FEATURELINE" info "$mesh" "$sample" "$tmp/missing.obj" >"$tmp/many.json" 2>"$tmp/err"; rc=$?
+check "several meshes, one missing: exit 1" [ $rc = 1 ]
+check "several meshes: one entry each, in order" [ "$(jq -c '[.[].mesh|split("/")|last]' "$tmp/many.json")" = '["fandisk.off","ridge_field.off","missing.obj"]' ]
+check "several meshes: results and the error" [ "$(jq -c '[.[0].result.vertices, .[1].result.vertices, (.[2].error|test("does not exist"))]' "$tmp/many.json")" = "[6475,1681,true]" ]
 exit $fail

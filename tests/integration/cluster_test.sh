@@ -19,7 +19,6 @@ for tool in curl jq node nginx redis-server redis-cli ss; do
   command -v "$tool" >/dev/null || [ -x "/usr/sbin/$tool" ] || { echo "FAIL $tool is not installed (run scripts/setup.sh)"; exit 1; }
 done
 [ -x "$SERVER" ] || { echo "FAIL no server binary at $SERVER"; exit 1; }
-[ -f web/dist/index.html ] || { echo "FAIL no built page in web/dist (run scripts/setup.sh)"; exit 1; }
 for f in armadillo_29k.obj dragon_25k.off bunny_closed.off; do
   [ -f "$MESHES/$f" ] || { echo "FAIL missing test mesh $MESHES/$f"; exit 1; }
 done

@@ -46,7 +46,7 @@ const dist = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
 
 async function run() {
   const base = await h.startServer(['--preload', SAMPLE]);
-  ok('the server starts with --web-root and --preload');
+  ok('the server starts with --preload, serving its page');
   page = await h.launch({ width: 1280, height: 800 });
   const tmp = h.tmp;
 

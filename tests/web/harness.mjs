@@ -115,6 +115,9 @@ export function createHarness({ totalTimeoutMs = 180_000, artifactName = 'web.pn
       h.fail('the server binary exists', `${SERVER} not found (build featureline-server, or set SERVER)`);
       h.finish(1);
     }
+    // WEB_ROOT=embedded: the page compiled into the server binary, as a user runs it.
+    h.embeddedPage = process.env.WEB_ROOT === 'embedded';
+    if (h.embeddedPage) return;
     h.webRoot = process.env.WEB_ROOT ? fromRepo(process.env.WEB_ROOT) : '';
     if (!h.webRoot) {
       try {
@@ -130,7 +133,7 @@ export function createHarness({ totalTimeoutMs = 180_000, artifactName = 'web.pn
 
   h.startServer = async (extraArgs = []) => {
     const portFile = path.join(h.tmp, 'port');
-    h.server = spawn(SERVER, ['--host', '127.0.0.1', '--port', '0', '--port-file', portFile, '--web-root', h.webRoot, '--threads', '2', ...extraArgs], {
+    h.server = spawn(SERVER, ['--host', '127.0.0.1', '--port', '0', '--port-file', portFile, ...(h.embeddedPage ? [] : ['--web-root', h.webRoot]), '--threads', '2', ...extraArgs], {
       stdio: ['ignore', 'pipe', 'pipe'],
     });
     h.server.stdout.on('data', (d) => (h.serverLog += d));
