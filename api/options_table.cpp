@@ -240,4 +240,36 @@ const OptionTable<CurvatureOptions>& curvature_option_table() {
   return table;
 }
 
+namespace {
+// Caps on the answer's size: every chain carries its points, so these bound the document.
+constexpr double kMaxCreaseChainsCap = 1000;
+constexpr double kMaxVerticesPerSignCap = 1000;
+}  // namespace
+
+const OptionTable<FeatureSeedOptions>& feature_seed_option_table() {
+  using O = FeatureSeedOptions;
+  static const OptionTable<O> table = {
+      option<O>("max_crease_chains", within(O::max_crease_chains_range, kEngineEnd, kMaxCreaseChainsCap),
+                "Crease chains returned, longest first (0: none)", "--max-chains", &O::max_crease_chains),
+      option<O>("min_chain_edges", within(O::min_chain_edges_range, kEngineEnd, 1e6), "Crease chains of fewer edges "
+                "are left out", "--min-chain-edges", &O::min_chain_edges),
+      option<O>("corner_angle", within(O::corner_angle_range), "A crease chain is split where it turns by more than "
+                "this many degrees (180: only where creases meet)", "--corner-angle", &O::corner_angle),
+      option<O>("max_vertices_per_sign", within(O::max_vertices_per_sign_range, kEngineEnd, kMaxVerticesPerSignCap),
+                "Ridge vertices returned, and as many valley vertices, strongest first (0: none)", "--max-seeds",
+                &O::max_vertices_per_sign),
+      option<O>("spacing", within(O::spacing_range, kEngineEnd, 1000), "Ridge or valley vertices are at least this "
+                "many local edge lengths apart", "--seed-spacing", &O::spacing),
+      option<O>("crease_clearance", within(O::crease_clearance_range, kEngineEnd, 100), "Ridge or valley vertices "
+                "are more than this many rings of edges from a crease or the boundary", "--crease-clearance",
+                &O::crease_clearance),
+      option<O>("min_strength", within(O::min_strength_range, kEngineEnd, 1000), "A ridge or valley vertex's "
+                "curvature is at least this share of the mesh's 90th percentile", "--min-strength", &O::min_strength),
+      option<O>("min_signal_to_noise", within(O::min_signal_to_noise_range, kEngineEnd, 1000), "A ridge or valley "
+                "vertex bends the surface over the curvature fit by this many times the estimated noise (0: off)",
+                "--min-signal-to-noise", &O::min_signal_to_noise),
+  };
+  return table;
+}
+
 }  // namespace featureline

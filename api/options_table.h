@@ -19,6 +19,7 @@
 #include "engine/curvature.h"
 #include "engine/enum_names.h"
 #include "engine/feature_line.h"
+#include "engine/feature_seeds.h"
 #include "engine/segmentation.h"
 
 namespace featureline {
@@ -63,6 +64,8 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table();
 const OptionTable<SegmentationOptions>& segmentation_option_table();
 /// CurvatureOptions: how a mesh is prepared (CLI flags; uploads use the defaults).
 const OptionTable<CurvatureOptions>& curvature_option_table();
+/// FeatureSeedOptions: which crease chains and ridge and valley vertices are offered as seeds.
+const OptionTable<FeatureSeedOptions>& feature_seed_option_table();
 
 /// Limits of a request's shape rather than of one option, served beside the tables.
 struct RequestLimits {

@@ -80,10 +80,30 @@ SegmentationOptions parse_segmentation_options(const json& body, const std::vect
   return parsed;
 }
 
+FeatureSeedOptions parse_feature_seed_query(const std::vector<std::pair<std::string, std::string>>& parameters) {
+  json object = json::object();
+  for (const auto& [name, text] : parameters) {
+    if (name.size() > 64) throw InvalidInputError("unknown query parameter (" + std::to_string(name.size()) + " characters)");
+    double value = 0;
+    std::size_t used = 0;
+    try {
+      value = std::stod(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != text.size()) throw InvalidInputError("query parameter \"" + name + "\" must be a number");
+    object[name] = value;
+  }
+  FeatureSeedOptions options;
+  apply_options(feature_seed_option_table(), object, "", options);
+  return options;
+}
+
 json describe_api_options() {
   return {{"feature_line", describe_options(option_specs(feature_line_option_table()))},
           {"segmentation", describe_options(option_specs(segmentation_option_table()))},
           {"curvature", describe_options(option_specs(curvature_option_table()))},
+          {"features", describe_options(option_specs(feature_seed_option_table()))},
           {"limits",
            {{"max_lines", RequestLimits::max_lines},
             {"max_keys_per_line", RequestLimits::max_keys_per_line},

@@ -4,11 +4,13 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "engine/feature_line.h"
+#include "engine/feature_seeds.h"
 #include "engine/prepared_mesh.h"
 #include "engine/segmentation.h"
 
@@ -28,6 +30,10 @@ std::vector<FeatureLineRequest> parse_feature_line_body(const nlohmann::json& bo
 /// `line_fields` (the fields that say which lines to cut along), by segmentation_option_table().
 SegmentationOptions parse_segmentation_options(const nlohmann::json& body,
                                                const std::vector<std::string>& line_fields = {"lines"});
+
+/// The options of GET /v1/meshes/{id}/features from its query parameters (each named as a row of
+/// feature_seed_option_table(), its value a number). \throw InvalidInputError naming the parameter
+FeatureSeedOptions parse_feature_seed_query(const std::vector<std::pair<std::string, std::string>>& parameters);
 
 /// GET /v1/options: every option table as describe_options() rows, with the request limits.
 nlohmann::json describe_api_options();

@@ -1,5 +1,6 @@
 #include "api/segmentation_json.h"
 
+#include "api/export_formats.h"
 #include "api/gltf_export.h"
 #include "engine/errors.h"
 #include "engine/surface_point.h"
@@ -116,9 +117,8 @@ std::vector<FeatureLineResult> resolve_segmentation_lines(
 }
 
 std::string segmentation_to_glb(const PreparedMesh& mesh, const SegmentationResult& r) {
-  const int count = int(r.segments.size());
-  if (r.remeshed) return labelled_mesh_to_glb(r.positions, r.triangles, r.labels, count);
-  return labelled_mesh_to_glb(mesh.positions, mesh.triangles, r.labels, count);
+  const SegmentedSurface surface = segmented_surface(mesh, r);
+  return labelled_mesh_to_glb(surface.positions, surface.triangles, r.labels, int(r.segments.size()));
 }
 
 }  // namespace featureline

@@ -1,5 +1,5 @@
-// Accuracy of the initial and the refined line against known answers, clean and noisy (issue 9:
-// the refined line must never be worse than the initial one on noisy scans and CAD creases).
+// Accuracy of the initial and the refined line against known answers, clean and noisy (the
+// refined line must never be worse than the initial one on noisy scans and CAD creases).
 //
 // Cases:
 //   ridge / valley n=N   make_ridge_field(n, jitter 0.2, seed, +-0.3, width 0.25, bend 0.3); one

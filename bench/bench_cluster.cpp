@@ -1,4 +1,4 @@
-// Lines through the cluster's nginx versus one replica directly (issue 11): 3-key lines on
+// Lines through the cluster's nginx versus one replica directly: 3-key lines on
 // copies of the 70k-triangle bunny (each copy its own mesh id, so nginx's hash spreads them
 // over the replicas), at 32, 128 and 512 keep-alive connections. bench/bench_cluster.sh starts
 // the cluster and runs this; it also measures a dead replica's failover.

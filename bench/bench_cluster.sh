@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The cluster on loopback (issue 11): scripts/cluster.sh with 3 replicas, then
+# The cluster on loopback: scripts/cluster.sh with 3 replicas, then
 #  1. lines/s and p50/p99 at 32, 128 and 512 connections through nginx vs one replica directly
 #     (build/bench/bench_cluster);
 #  2. the time to the first answer for a mesh whose replica died: igea (268,686 triangles)

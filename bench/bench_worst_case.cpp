@@ -42,7 +42,7 @@ FeatureLineOptions options_at_caps(bool strong_force) {
   o.strip.rings = int(spec_of("rings").maximum);
   o.min_piece_edges = int(spec_of("min_piece_edges").minimum);
   o.strip.max_edge_distortion = spec_of("max_edge_distortion").maximum;
-  if (strong_force) {  // issue 14's regression: an extreme force made the snake add points without bound
+  if (strong_force) {  // an extreme force once made the snake add points without bound
     o.snake.kappa = spec_of("snake.kappa").maximum;
     o.snake.exponent = spec_of("snake.exponent").maximum;
     o.snake.max_step = spec_of("snake.max_step").maximum;

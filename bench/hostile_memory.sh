@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Memory of featureline-server under the hostile clients of issue 10: prints resident memory
+# Memory of featureline-server under hostile clients (header floods, stalled uploads, many
+# uploads into a small cache, deletes): prints resident memory
 # (VmRSS) after each case and its peak during the case (VmHWM, reset before each case).
 #   bash bench/hostile_memory.sh [SERVER]        (default build/server/featureline-server)
 # The server runs with --cache-mb 64 and its other defaults (256 MiB uploads, 512 MiB upload

@@ -9,18 +9,23 @@
 #include <functional>
 #include <iostream>
 #include <iterator>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
+#include "api/export_formats.h"
 #include "api/feature_line_json.h"
+#include "api/feature_seeds_json.h"
 #include "api/gltf_export.h"
+#include "api/json_budget.h"
 #include "api/options_table.h"
 #include "api/requests.h"
 #include "api/segmentation_json.h"
 #include "engine/errors.h"
 #include "engine/feature_line.h"
+#include "engine/feature_seeds.h"
 #include "engine/mesh_io.h"
 #include "engine/segmentation.h"
 #include "featureline_version.h"
@@ -200,7 +205,7 @@ json read_request_file(const std::string& path) {
     text = read_stream(file, featureline::RequestLimits::max_json_bytes, "request file '" + path + "'");
   }
   try {
-    return json::parse(text);
+    return featureline::parse_json_within(text);
   } catch (const json::parse_error& e) {
     throw InvalidInputError("the request is not valid JSON: " + std::string(e.what()));
   }
@@ -292,22 +297,25 @@ json segmentation_body(const LineFlags& f) {
 
 // ---- output -------------------------------------------------------------------------------------
 
-// A command's answer: its JSON, and the same as a GLB when --out asks for one.
+// A command's answer: its JSON, and what it holds for the other formats --out can ask for.
 struct Answer {
   json body;
-  std::function<std::string()> glb;
+  std::optional<featureline::ExportContent> content;            // lines or a segmentation; none: JSON only
+  std::function<std::string(featureline::ExportFormat)> file;  // the answer in a format the content allows
 };
 
-// Writes to --out (its extension picks the format) or standard output (JSON).
-void write_output(const std::string& path, const std::function<std::string()>& glb, const json& answer) {
+// Writes to --out (its ending picks the format: api/export_formats.h) or standard output (JSON).
+void write_output(const std::string& path, const Answer& answer) {
+  using featureline::ExportFormat;
   if (path.empty() || path == "-") {
-    std::cout << answer.dump(2) << "\n";
+    std::cout << answer.body.dump(2) << "\n";
     return;
   }
-  std::string content;
-  if (ends_with(path, ".glb") && glb) content = glb();
-  else if (ends_with(path, ".json")) content = answer.dump(2) + "\n";
-  else throw CLI::ValidationError(std::string("--out must end in .json") + (glb ? " or .glb" : "") + " (or be - for standard output)");
+  const auto format = featureline::export_format_from_path(path);
+  const std::string endings = answer.content ? featureline::export_format_extensions(*answer.content) : ".json";
+  if (!format || (*format != ExportFormat::json && !(answer.content && featureline::can_export(*format, *answer.content))))
+    throw CLI::ValidationError("--out must end in one of " + endings + " (or be - for standard output)");
+  const std::string content = *format == ExportFormat::json ? answer.body.dump(2) + "\n" : answer.file(*format);
   std::ofstream out(path, std::ios::binary);
   if (!out) throw std::runtime_error("cannot write " + path);
   out << content;
@@ -326,7 +334,11 @@ Answer detect(const featureline::PreparedMesh& mesh, const LineFlags& f) {
   } else {
     answer = featureline::feature_line_to_json(results[0]);
   }
-  return {answer, [&mesh, results] { return featureline::feature_line_to_glb(mesh, results, /*include_mesh=*/true); }};
+  return {answer, featureline::ExportContent::lines, [&mesh, results](featureline::ExportFormat format) {
+            if (format == featureline::ExportFormat::glb) return featureline::feature_line_to_glb(mesh, results, /*include_mesh=*/true);
+            if (format == featureline::ExportFormat::gltf) return featureline::feature_line_to_gltf_json(mesh, results, true);
+            return featureline::export_lines(results, format);
+          }};
 }
 
 Answer segment(const featureline::PreparedMesh& mesh, const LineFlags& f) {
@@ -341,7 +353,11 @@ Answer segment(const featureline::PreparedMesh& mesh, const LineFlags& f) {
         return results;
       });
   const auto parts = featureline::segment_mesh(mesh, lines, options);
-  return {featureline::segmentation_to_json(parts, options.mode), [&mesh, parts] { return featureline::segmentation_to_glb(mesh, parts); }};
+  return {featureline::segmentation_to_json(parts, options.mode), featureline::ExportContent::segmentation,
+          [&mesh, parts](featureline::ExportFormat format) {
+            if (format == featureline::ExportFormat::glb) return featureline::segmentation_to_glb(mesh, parts);
+            return featureline::export_segmentation(mesh, parts, format);
+          }};
 }
 
 // Runs `command` on each mesh: one mesh prints its answer; several print a JSON array of
@@ -352,7 +368,7 @@ int for_each_mesh(const Inputs& in, const std::string& out_path,
     double load_ms = 0;
     const auto mesh = prepare(in.meshes[0], in, load_ms);
     const Answer answer = command(*mesh, load_ms);
-    write_output(out_path, answer.glb, answer.body);
+    write_output(out_path, answer);
     return 0;
   }
   if (!out_path.empty() && out_path != "-") throw CLI::ValidationError("--out takes one mesh; several print a JSON array");
@@ -393,6 +409,7 @@ struct Program {
     add_detect();
     add_segment();
     add_info();
+    add_features();
     auto* options = app.add_subcommand("options", "Every request option with its type, default, limits and description (JSON)");
     options->callback([this] {
       run = [] {
@@ -406,7 +423,8 @@ struct Program {
     auto* detect_command = app.add_subcommand("detect", "Detect a feature line through key vertices (or points)");
     add_inputs(*detect_command, in, true);
     add_line_flags(*detect_command, line);
-    detect_command->add_option("--out", line.out_path, "Write FILE.json or FILE.glb (line and mesh) instead of printing JSON")
+    detect_command->add_option("--out", line.out_path, "Write the answer to FILE, in the format its ending names: .json, .glb or .gltf (lines and mesh), "
+                                ".obj (l polylines), .ply (edges), .polylines.txt (CGAL)")
         ->type_name("FILE");
     detect_command->callback([this] {
       run = [this] { return for_each_mesh(in, line.out_path, [this](const auto& mesh, double) { return detect(mesh, line); }); };
@@ -426,9 +444,26 @@ struct Program {
     segment_command->add_option("--options", line.options_text, "Options of every line, as a JSON object")->type_name("JSON");
     add_table_flags(*segment_command, featureline::feature_line_option_table(), line.options, "Feature-line options (every line)");
     add_table_flags(*segment_command, featureline::segmentation_option_table(), line.segmentation, "Segmentation options");
-    segment_command->add_option("--out", line.out_path, "Write parts.glb (one primitive per part) or labels.json")->type_name("FILE");
+    segment_command->add_option("--out", line.out_path, "Write the answer to FILE, in the format its ending names: .json (labels), .glb (one primitive per "
+                                 "part), .ply (colour and label per face), .obj (a group per part)")->type_name("FILE");
     segment_command->callback([this] {
       run = [this] { return for_each_mesh(in, line.out_path, [this](const auto& mesh, double) { return segment(mesh, line); }); };
+    });
+  }
+
+  json feature_seed_flags = json::object();
+  void add_features() {
+    auto* features = app.add_subcommand("features", "What to pick keys from: crease chains and the strongest ridge and valley vertices (JSON)");
+    add_inputs(*features, in, true);
+    add_table_flags(*features, featureline::feature_seed_option_table(), feature_seed_flags, "Feature options");
+    features->callback([this] {
+      run = [this] {
+        featureline::FeatureSeedOptions options;
+        featureline::apply_options(featureline::feature_seed_option_table(), feature_seed_flags, "", options);
+        return for_each_mesh(in, "", [options](const auto& mesh, double) {
+          return Answer{featureline::feature_seeds_to_json(mesh, featureline::find_feature_seeds(mesh, options)), {}, nullptr};
+        });
+      };
     });
   }
 
@@ -438,7 +473,7 @@ struct Program {
     info->callback([this] {
       run = [this] {
         return for_each_mesh(in, "", [](const auto& mesh, double load_ms) {
-          return Answer{featureline::mesh_info_to_json(mesh, load_ms), nullptr};
+          return Answer{featureline::mesh_info_to_json(mesh, load_ms), {}, nullptr};
         });
       };
     });

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The cluster on one machine without Docker (issue 11): nginx (Debian's) in front on port P,
+# The cluster on one machine without Docker: nginx (Debian's) in front on port P,
 # Redis as the shared upload store, and N featureline-server replicas on loopback ports.
 #
 #   scripts/cluster.sh up     --port P [--replicas N] [--wipe] [--state-dir D] [-- SERVER FLAGS...]

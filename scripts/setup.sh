@@ -11,9 +11,10 @@ packages=(g++ cmake ninja-build pkg-config git ca-certificates
   libgtest-dev libcli11-dev jq curl zlib1g-dev libnanoflann-dev libhiredis-dev help2man)
 # What only the tests use (scripts/test.sh sets FEATURELINE_TEST_TOOLS=1): the browser, the
 # cluster's nginx and Redis, the deployment files' YAML check, ss for free ports, what CPack
-# reads the .deb's dependencies with (dpkg-shlibdeps, file).
+# reads the .deb's dependencies with (dpkg-shlibdeps, file), and the independent readers the
+# export formats are read back with (meshio, Open3D, VTK).
 if [ "${FEATURELINE_TEST_TOOLS:-0}" = 1 ]; then
-  packages+=(chromium nginx redis-server python3-yaml iproute2 dpkg-dev file)
+  packages+=(chromium nginx redis-server python3-yaml iproute2 dpkg-dev file python3-meshio python3-open3d python3-vtk9)
 fi
 # The fuzz build (scripts/test.sh, scripts/fuzz.sh) compiles with clang and links libFuzzer.
 case " $* " in *clang*) packages+=(clang libclang-rt-14-dev) ;; esac

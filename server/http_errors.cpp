@@ -12,7 +12,8 @@ namespace featureline::server {
 
 std::string ErrorReply::body() const {
   // replace: a message with invalid UTF-8 (from any path that forgot quote_client_text) must
-  // still serialise; a throw here once skipped the close-after-refusal (issue 10).
+  // still serialise: a throw here would skip the close after a refusal, and the unread body
+  // would then be parsed as the next request.
   return nlohmann::json{{"error", {{"code", code}, {"message", message}}}}.dump(-1, ' ', false,
                                                                                nlohmann::json::error_handler_t::replace);
 }

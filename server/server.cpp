@@ -2,8 +2,11 @@
 
 // Eigen (through the engine headers) must come before httplib.h: httplib pulls in
 // <resolv.h>, whose `_res` macro breaks Eigen's templates.
+#include "api/export_formats.h"
 #include "api/feature_line_json.h"
+#include "api/feature_seeds_json.h"
 #include "api/gltf_export.h"
+#include "api/json_budget.h"
 #include "api/options_table.h"
 #include "api/requests.h"
 #include "api/segmentation_json.h"
@@ -28,6 +31,7 @@
 #include <malloc.h>
 #include <mutex>
 
+#include "server/byte_account.h"
 #include "server/compression.h"
 #include "server/http_errors.h"
 #include "server/metrics.h"
@@ -44,6 +48,8 @@ using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
 constexpr std::size_t kMaxJsonBytes = RequestLimits::max_json_bytes;
+// Upload buffers start at this and double as bytes arrive (held against the upload budget).
+constexpr std::size_t kUploadChunkBytes = std::size_t(1) << 20;
 
 // The time routing started on this worker thread (set in the pre-routing handler), for the
 // access log and the latency metrics.
@@ -403,15 +409,21 @@ struct FeaturelineServer::Impl {
       // The page's largest download: gzip when accepted (httplib compresses no model/* type).
       set_content_gzip_if_accepted(req, res, std::move(glb), "model/gltf-binary");
     }));
+    http.Get(mesh + "/features", guarded("/v1/meshes/{id}/features", [this](const auto& req, auto& res) {
+      // Crease chains and ridge/valley vertices to pick keys from; options as query parameters.
+      auto session = session_or_404(req.matches[1]);
+      const FeatureSeedOptions seed_options = parse_feature_seed_query({req.params.begin(), req.params.end()});
+      write_json(res, 200, run_on_pool([session, seed_options](const Cancellation* cancel) {
+        return feature_seeds_to_json(*session->mesh, find_feature_seeds(*session->mesh, seed_options, cancel));
+      }));
+    }));
     http.Get(mesh + "/curvature", guarded("/v1/meshes/{id}/curvature", [this](const auto& req, auto& res) {
       curvature(req, res);
     }));
-    http.Post(mesh + "/feature-lines", guarded("/v1/meshes/{id}/feature-lines", [this](const auto& req, auto& res) {
-      feature_lines(req, res);
-    }));
-    http.Post(mesh + "/segmentation", guarded("/v1/meshes/{id}/segmentation", [this](const auto& req, auto& res) {
-      segmentation(req, res);
-    }));
+    post_json(mesh + "/feature-lines", "/v1/meshes/{id}/feature-lines",
+              [this](const auto& req, JsonBody& body, auto& res) { feature_lines(req, body, res); });
+    post_json(mesh + "/segmentation", "/v1/meshes/{id}/segmentation",
+              [this](const auto& req, JsonBody& body, auto& res) { segmentation(req, body, res); });
     http.Get("/v1/options", guarded("/v1/options", [](const auto&, auto& res) {
       // Every option with its type, default, limits and description (the page's inputs use it).
       static const std::string description = describe_api_options().dump();
@@ -523,28 +535,21 @@ struct FeaturelineServer::Impl {
     return head;
   }
 
-  // Upload bodies being received sit outside the cache budget: their total is bounded here, so
-  // a few slow 200 MB uploads cannot take the memory (issue 10: 4 of them reached 880 MB RSS).
-  std::atomic<std::size_t> upload_bytes_in_flight{0};
-  struct UploadReservation {
-    Impl& server;
-    std::size_t bytes;
-    UploadReservation(Impl& s, std::size_t n) : server(s), bytes(n) {
-      const std::size_t budget = s.options.upload_buffer_mb != 0 ? s.options.upload_buffer_mb << 20 : 2 * (s.options.max_upload_mb << 20);
-      std::size_t used = s.upload_bytes_in_flight.load();
-      do {
-        if (used + n > budget) {
-          s.metrics.record_rejected("upload_buffer_full");
-          throw HttpError(503, "overloaded", "uploads being received already hold " + std::to_string(used >> 20) + " MiB of the " +
-                                                 std::to_string(budget >> 20) + " MiB the server buffers; retry shortly",
-                          {{"Retry-After", "5"}});
-        }
-      } while (!s.upload_bytes_in_flight.compare_exchange_weak(used, used + n));
-    }
-    ~UploadReservation() { server.upload_bytes_in_flight -= bytes; }
-    UploadReservation(const UploadReservation&) = delete;
-    UploadReservation& operator=(const UploadReservation&) = delete;
-  };
+  // Upload bodies being received sit outside the cache budget: their total is bounded here, by
+  // the bytes each has received (not what it declares), so a few slow large uploads cannot hold
+  // the memory or the budget (4 uploads of 200 MB had reached 880 MB of resident memory).
+  ByteAccount upload_buffer{options.upload_buffer_mb != 0 ? options.upload_buffer_mb << 20 : 2 * (options.max_upload_mb << 20)};
+  HttpError upload_buffer_full() {
+    metrics.record_rejected("upload_buffer_full");
+    return HttpError(503, "overloaded", "uploads being received already hold " + std::to_string(upload_buffer.used() >> 20) +
+                                            " MiB of the " + std::to_string(upload_buffer.capacity() >> 20) +
+                                            " MiB the server buffers; retry shortly",
+                     {{"Retry-After", "5"}});
+  }
+
+  // Parsed JSON bodies share one budget too: a body's DOM is bounded by its size
+  // (api/json_budget.h), and all of them at once by this account.
+  ByteAccount json_memory{std::max<std::size_t>(std::size_t(64) << 20, (options.cache_mb << 20) / 4)};
 
   // Expect: 100-continue: an upload that will be refused gets its refusal instead of 100 Continue
   // (the client then never sends the body, and the transport closes the connection).
@@ -566,17 +571,26 @@ struct FeaturelineServer::Impl {
     const UploadHead head = check_upload_head(req);
     const std::size_t length = head.length;
     std::optional<MeshFormat> format = head.format;
-    const UploadReservation reservation(*this, length);
+    ByteHold buffered(upload_buffer);
+    if (!buffered.hold(std::min(length, kUploadChunkBytes))) throw upload_buffer_full();
 
     // The bytes are kept as uploaded: the store holds them so the mesh can be prepared again.
     auto upload = std::make_shared<StoredUpload>();
     std::string& body = upload->bytes;
-    body.reserve(length);
+    body.reserve(std::min(length, kUploadChunkBytes));
+    bool buffer_full = false;
     const bool complete = reader([&](const char* data, std::size_t size) {
       if (body.size() + size > length) return false;
+      // Grown as bytes arrive, and held by capacity: what the string has really allocated.
+      if (body.size() + size > body.capacity()) {
+        const std::size_t capacity = std::min(length, std::max(body.size() + size, 2 * body.capacity()));
+        if (!buffered.hold(capacity)) return !(buffer_full = true);
+        body.reserve(capacity);
+      }
       body.append(data, size);
       return true;
     });
+    if (buffer_full) throw upload_buffer_full();
     body_read = complete && body.size() == length;
     if (!body_read) {
       throw HttpError(400, "malformed_mesh", "the upload ended after " + std::to_string(body.size()) + " of " +
@@ -661,23 +675,92 @@ struct FeaturelineServer::Impl {
   }
 
   // The JSON body of a POST, checked for type and size.
-  json json_body(const httplib::Request& req) const {
+  // A JSON request body: its text and its DOM counted against json_memory while the request
+  // holds them, so concurrent bodies share one bound.
+  struct JsonBody {
+    explicit JsonBody(ByteAccount& account) : held(account) {}
+    std::string text;
+    ByteHold held;
+  };
+
+  // A POST route with a JSON body: the body is read here, by bytes received, within 4 MiB and
+  // the shared budget; a body left unread closes the connection (the transport does), so say so.
+  template <typename Handler>
+  void post_json(const std::string& pattern, const char* route, Handler handler) {
+    http.Post(pattern, [this, route, handler](const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
+      request_route = route;
+      bool body_read = false;
+      try {
+        JsonBody body(json_memory);
+        body_read = read_json_text(reader, body);
+        handler(req, body, res);
+      } catch (...) {
+        write_error(res, error_reply(std::current_exception()));
+        if (!body_read) res.set_header("Connection", "close");
+      }
+    });
+  }
+
+  HttpError json_memory_full() {
+    metrics.record_rejected("json_memory_full");
+    return HttpError(503, "overloaded", "request bodies being parsed already hold " + std::to_string(json_memory.used() >> 20) +
+                                            " MiB of the " + std::to_string(json_memory.capacity() >> 20) + " MiB they may; retry shortly",
+                     {{"Retry-After", "1"}});
+  }
+
+  // Reads the body into body.text; true when it was read whole. \throw HttpError 413, 503
+  bool read_json_text(const httplib::ContentReader& reader, JsonBody& body) {
+    bool too_large = false, full = false;
+    const bool complete = reader([&](const char* data, std::size_t size) {
+      if (body.text.size() + size > kMaxJsonBytes) return !(too_large = true);
+      if (body.text.size() + size > body.text.capacity()) {
+        const std::size_t capacity = std::min(kMaxJsonBytes, std::max(body.text.size() + size, 2 * body.text.capacity()));
+        if (!body.held.hold(capacity)) return !(full = true);
+        body.text.reserve(capacity);
+      }
+      body.text.append(data, size);
+      return true;
+    });
+    if (too_large) throw HttpError(413, "payload_too_large", "the request body exceeds 4 MiB");
+    if (full) throw json_memory_full();
+    if (!complete) throw HttpError(400, "invalid_request", "the request body ended early");
+    return true;
+  }
+
+  // The body as a JSON object, its DOM's size checked against the text's and held as well.
+  json json_body(const httplib::Request& req, JsonBody& body) {
     const std::string type = media_type(req.get_header_value("Content-Type"));
     if (!type.empty() && type != "application/json")
       throw HttpError(415, "unsupported_format",
                       "send the request as application/json (curl: -H 'Content-Type: application/json'), not \"" + type + "\"");
-    if (req.body.size() > kMaxJsonBytes) throw HttpError(413, "payload_too_large", "the request body exceeds 4 MiB");
-    json body = json::parse(req.body);
-    if (!body.is_object()) throw InvalidInputError("the request body must be a JSON object");
-    return body;
+    const JsonShape shape = measure_json(body.text);
+    check_json_shape(body.text.size(), shape);
+    if (!body.held.hold(body.text.capacity() + shape.dom_bytes())) throw json_memory_full();
+    json parsed = json::parse(body.text);
+    if (!parsed.is_object()) throw InvalidInputError("the request body must be a JSON object");
+    return parsed;
   }
 
-  void segmentation(const httplib::Request& req, httplib::Response& res) {
+  // The answer's format: ?format= (a name of api/export_formats.h) wins over Accept (the formats
+  // with a type of their own); JSON otherwise. \throw HttpError 400 for a format `content` lacks
+  static ExportFormat answer_format(const httplib::Request& req, ExportContent content) {
+    if (req.has_param("format")) {
+      const auto format = parse_export_format(req.get_param_value("format"));
+      if (!format || !can_export(*format, content))
+        throw HttpError(400, "invalid_request", "format must be " + export_format_names(content));
+      return *format;
+    }
+    for (const auto& row : export_format_table()) {
+      const bool own_type = std::string_view(row.mime_type) != "text/plain" && row.format != ExportFormat::json;
+      if (own_type && can_export(row.format, content) && accepts(req, row.mime_type)) return row.format;
+    }
+    return ExportFormat::json;
+  }
+
+  void segmentation(const httplib::Request& req, JsonBody& request_body, httplib::Response& res) {
     auto session = session_or_404(req.matches[1]);
-    const bool glb = req.has_param("format") ? req.get_param_value("format") == "glb" : accepts(req, "model/gltf-binary");
-    if (req.has_param("format") && !glb && req.get_param_value("format") != "json")
-      throw HttpError(400, "invalid_request", "format must be json or glb");
-    const json body = json_body(req);
+    const ExportFormat format = answer_format(req, ExportContent::segmentation);
+    const json body = json_body(req, request_body);
     const SegmentationOptions segmentation_options = parse_segmentation_options(body);
     if (!body.contains("lines")) throw InvalidInputError("\"lines\" is required");
     // Items are line requests (detected here) or lines the client already has (computed once).
@@ -688,30 +771,25 @@ struct FeaturelineServer::Impl {
     const SegmentationResult segments = run_on_pool([session, results, segmentation_options](const Cancellation* cancel) {
       return segment_mesh(*session->mesh, results, segmentation_options, cancel);
     });
-    if (glb) res.set_content(segmentation_to_glb(*session->mesh, segments), "model/gltf-binary");
-    else write_json(res, 200, segmentation_to_json(segments, segmentation_options.mode));
+    if (format == ExportFormat::json) write_json(res, 200, segmentation_to_json(segments, segmentation_options.mode));
+    else if (format == ExportFormat::glb) res.set_content(segmentation_to_glb(*session->mesh, segments), "model/gltf-binary");
+    else res.set_content(export_segmentation(*session->mesh, segments, format), export_format_info(format).mime_type);
   }
 
-  void feature_lines(const httplib::Request& req, httplib::Response& res) {
+  void feature_lines(const httplib::Request& req, JsonBody& request_body, httplib::Response& res) {
     auto session = session_or_404(req.matches[1]);
-    // Answer format: ?format= wins over Accept.
-    std::string answer = "json";
-    if (req.has_param("format")) {
-      answer = req.get_param_value("format");
-      if (answer != "json" && answer != "glb" && answer != "gltf")
-        throw HttpError(400, "invalid_request", "format must be json, glb or gltf");
-    } else if (accepts(req, "model/gltf-binary")) {
-      answer = "glb";
-    } else if (accepts(req, "model/gltf+json")) {
-      answer = "gltf";
-    }
+    const ExportFormat answer = answer_format(req, ExportContent::lines);
     bool batch = false;
-    const std::vector<FeatureLineRequest> lines = parse_feature_line_body(json_body(req), *session->mesh, batch);
+    const std::vector<FeatureLineRequest> lines = parse_feature_line_body(json_body(req, request_body), *session->mesh, batch);
+    request_body.text = std::string();  // the keys are all a line needs from here on
+    request_body.held.hold(0);
     const std::vector<FeatureLineResult> results = run_lines(session, lines);
-    if (answer == "glb") {
+    if (answer == ExportFormat::glb) {
       res.set_content(feature_line_to_glb(*session->mesh, results, false), "model/gltf-binary");
-    } else if (answer == "gltf") {
+    } else if (answer == ExportFormat::gltf) {
       res.set_content(feature_line_to_gltf_json(*session->mesh, results, false), "model/gltf+json");
+    } else if (answer != ExportFormat::json) {
+      res.set_content(export_lines(results, answer), export_format_info(answer).mime_type);
     } else if (batch) {
       json out = json::array();
       for (const auto& r : results) out.push_back(feature_line_to_json(r));

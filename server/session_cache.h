@@ -96,7 +96,7 @@ class SessionCache {
   std::list<std::string> gone_order_;
 };
 
-/// Sessions that outlive memory and restarts: the cache in front of an UploadStore (issue 11).
+/// Sessions that outlive memory and restarts: the cache in front of an UploadStore.
 /// An upload is stored before it is cached; a cache miss asks the store and rebuilds the prepared
 /// mesh from the stored bytes (once, however many requests wait for it), so eviction, a restart
 /// or another replica costs a rebuild, not the session. Without a store it is the cache alone.

@@ -480,10 +480,17 @@ bool GuardedServer::answer_refusal(Connection& connection, const ErrorReply& ref
   return true;  // the rest of the request is unread: linger on close
 }
 
+// How long an idle keep-alive connection keeps its worker while other connections wait.
+constexpr double kIdleWhenOthersWaitS = 1.0;
+
 bool GuardedServer::serve(Connection& connection) {
   for (std::size_t served = 0; served < limits_.keep_alive_max_requests; ++served) {
-    // An idle keep-alive connection gives its worker up when other connections wait for one.
-    const double idle = served > 0 && queue_->has_waiting() ? 0.0 : limits_.idle_timeout_s;
+    // An idle keep-alive connection gives its worker up sooner when other connections wait for
+    // one, but never at once: a client's next request may be on its way (closing then loses it,
+    // and a POST cannot be retried). The answer before already said Connection: close if others
+    // were waiting then.
+    const double idle = served > 0 && queue_->has_waiting() ? std::min(limits_.idle_timeout_s, kIdleWhenOthersWaitS)
+                                                            : limits_.idle_timeout_s;
     if (connection.wait_for_request(idle) != Connection::Wait::ready) return false;
     Connection::Head head = connection.read_head();
     if (head.refusal) return answer_refusal(connection, *head.refusal);
@@ -491,7 +498,8 @@ bool GuardedServer::serve(Connection& connection) {
     HeadCheck check = check_request_head(head.bytes, limits_);
     if (check.refusal) return answer_refusal(connection, *check.refusal);
     connection.begin_request(std::move(check.forwarded_head), check.content_length);
-    const bool last = stopping_ || served + 1 == limits_.keep_alive_max_requests;
+    // Others waiting for a worker: this answer is the connection's last, and says so.
+    const bool last = stopping_ || served + 1 == limits_.keep_alive_max_requests || queue_->has_waiting();
     bool closed_by_request = false;
     const bool ok = process_request(connection, last, closed_by_request, nullptr);
     // A body the handler left unread must never be parsed as a next request.

@@ -1,5 +1,5 @@
 // Durable uploads: each upload's original bytes and format, kept outside the process so that a
-// restart, an eviction or another replica can prepare the mesh again (issue 11). Two backends
+// restart, an eviction or another replica can prepare the mesh again. Two backends
 // behind one interface: a directory on disk (the single-binary default) and Redis (shared by
 // the replicas of a cluster). The prepared mesh itself is never stored: it is rebuilt from the
 // bytes, which keeps the store small (an upload is 10-20x smaller than its prepared mesh) and

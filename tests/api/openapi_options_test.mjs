@@ -60,6 +60,13 @@ test('a line\'s options agree with the feature-line table', () => {
   expectAgreement(tables.feature_line, schemas.Options);
 });
 
+test('the features route\'s options agree with the feature-seed table', () => {
+  expectAgreement(tables.features, schemas.FeatureSeedOptions);
+  const route = spec.paths['/v1/meshes/{mesh_id}/features'].get;
+  const names = route.parameters.filter((p) => p.in === 'query').map((p) => p.name).sort();
+  assert.deepEqual(names, tables.features.map((r) => r.name).sort());
+});
+
 test('a segmentation request\'s options agree with the segmentation table', () => {
   expectAgreement(tables.segmentation, schemas.SegmentationRequest, ['lines']);
 });

@@ -100,7 +100,7 @@ TEST(OptionTable, ErrorsNameTheFieldAndItsLimits) {
   EXPECT_EQ(error(R"({"snake": 3})"), "\"options.snake\" must be a JSON object");
   EXPECT_EQ(error(R"({"weights": {"alpha": -1}})"), "\"options.weights.alpha\" must be a number from 0 to 1000");
   EXPECT_EQ(error("[1]"), "\"options\" must be a JSON object");
-  // Issue 14's regression request (../shared/data/regressions/snake_runaway_ridge20.request.json)
+  // A request that once grew the snake without bound (../shared/data/regressions/snake_runaway_ridge20.request.json)
   // is refused at once instead of growing the snake for 51 s.
   EXPECT_EQ(error(R"({"snake": {"kappa": 1000}})"), "\"options.snake.kappa\" must be a number from 0 to 1");
   // JSON Schema counts 2.0 as an integer, so do we; the value is stored as the integer.

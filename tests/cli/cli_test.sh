@@ -79,12 +79,29 @@ check "a line that closes nothing exits 1" [ $rc = 1 ]
 check "and says so" grep -q "close no region" "$tmp/err"
 "$FEATURELINE" segment "$sample" --loop 700,705,750 --mode sideways >"$tmp/out" 2>"$tmp/err"; rc=$?
 check "unknown --mode exits 2" [ $rc = 2 ]
+# Seeding keys without the page: fandisk's crease chains, and a line through a chain's ends.
+"$FEATURELINE" features "$mesh" >"$tmp/features.json"; rc=$?
+check "features exits 0" [ $rc = 0 ]
+check "features finds fandisk's 34 crease chains" [ "$(jq '.crease_chains|length' "$tmp/features.json")" = 34 ]
+check "chains are longest first" [ "$(jq '[.crease_chains[].length] | . == (sort|reverse)' "$tmp/features.json")" = true ]
+check "every chain's points are its vertices' positions, one each" \
+  [ "$(jq '[.crease_chains[] | (.points|length) == (.vertices|length)] | all' "$tmp/features.json")" = true ]
+ends=$(jq -r '.crease_chains[0] | select(.closed|not) | "\(.vertices[0]),\(.vertices[(.vertices|length)/2|floor]),\(.vertices[-1])"' "$tmp/features.json")
+chain_length=$(jq '.crease_chains[0].length' "$tmp/features.json")
+"$FEATURELINE" detect "$mesh" --keys "$ends" >"$tmp/chain-line.json"; rc=$?
+check "a line through the longest chain's ends and middle follows it (length within 1%)" \
+  [ "$(jq --argjson c "$chain_length" '((.refined.length - $c) / $c) | fabs < 0.01' "$tmp/chain-line.json")" = true ]
+"$FEATURELINE" features "$mesh" --max-chains 5 --max-seeds 0 >"$tmp/f5.json"; rc=$?
+check "--max-chains 5 gives 5 chains" [ "$(jq '.crease_chains|length' "$tmp/f5.json")" = 5 ]
+"$FEATURELINE" features "$mesh" --corner-angle 200 >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "--corner-angle out of range: exit 2" [ $rc = 2 ]
+
 # Conventions: help and version on standard output with exit 0, for the program and each command.
 "$FEATURELINE" --help >"$tmp/out" 2>"$tmp/err"; rc=$?
 check "--help exits 0" [ $rc = 0 ]
 check "--help prints the commands on stdout" grep -q "detect" "$tmp/out"
 check "--help writes nothing on stderr" [ ! -s "$tmp/err" ]
-for command in detect segment info options; do
+for command in detect segment info features options; do
   "$FEATURELINE" $command --help >"$tmp/out" 2>"$tmp/err"; rc=$?
   check "$command --help exits 0 with its usage on stdout" [ $rc = 0 ] && check "$command --help: usage line" grep -q "^Usage: featureline $command" "$tmp/out"
 done

@@ -1,4 +1,4 @@
-// Accuracy against known answers (issue: the refined line must never be worse than the initial
+// Accuracy against known answers (the refined line must never be worse than the initial
 // one): the curvature stage's jet fit, noise estimate and creases, and whole lines on smooth
 // ridges and valleys at 0-30% noise and on CAD-like creases with tight rounded corners and long
 // skinny triangles. Distances are in grid spacings (fields) or outline edge lengths (slabs).
@@ -171,7 +171,7 @@ TEST(Accuracy, CleanCreasesAreFollowedExactlyThroughTightCorners) {
 TEST(JetCurvature, EveryEdgeOfRealCadCreaseChainsIsACrease) {
   // Chains of edges sharper than 30 degrees (>= 10 edges) on two real CAD meshes: their end
   // edges meet corners or skinny faces whose wings are as sharp as the crease, and must be
-  // marked all the same, or lines along them are not kept exactly (issue: clean rocker-arm
+  // marked all the same, or lines along them are not kept exactly (unmarked, clean rocker-arm
   // creases were refined 0.035 edge lengths off their exact initial line).
   for (const char* file : {"rocker-arm.obj", "fandisk.off"}) {
     SCOPED_TRACE(file);

@@ -1,5 +1,6 @@
 // Cancellation (engine/cancellation.h) reaches preparation and segmentation, the server's other
-// long jobs (issue 14): a refused or timed-out upload or segmentation stops its work.
+// long jobs: a refused or timed-out upload or segmentation stops its work instead of holding
+// an engine worker.
 #include <gtest/gtest.h>
 
 #include <chrono>

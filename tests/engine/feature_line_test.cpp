@@ -167,7 +167,7 @@ TEST(FeatureLine, CancellationStopsTheWork) {
   request.cancel = &cancelled;
   EXPECT_THROW(detect_feature_line(*mesh, request), CancelledError);
   // A deadline passing inside the snake: these options ask for 100,000 iterations that never
-  // converge (issue 14: many seconds of engine time for one small line); the work stops
+  // converge (many seconds of engine time for one small line); the work stops
   // instead of finishing.
   request.options.snake.max_iterations = 100000;
   request.options.snake.tolerance = 0;

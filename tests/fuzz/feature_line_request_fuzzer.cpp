@@ -1,4 +1,4 @@
-// libFuzzer harness: whole feature-line requests (issue 14), as POST /v1/meshes/{id}/feature-lines
+// libFuzzer harness: whole feature-line requests (bounded engine work per line), as POST /v1/meshes/{id}/feature-lines
 // receives them, parsed by api/requests.h and run by the engine on the bundled sample mesh
 // (1,681 vertices). Refused requests must be engine errors (mapped to 4xx/5xx by the server);
 // accepted ones must finish: run_fuzzer.sh's -timeout=10 flags any request whose lines keep the

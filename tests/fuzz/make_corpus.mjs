@@ -1,5 +1,5 @@
 // Writes the hand-made seeds and regression inputs of tests/fuzz/corpus/<format>/ (regression_*:
-// reproducers of issue 10's bugs). The files are kept in the repository; this script documents
+// reproducers of bugs the fuzzers found, fixed since). The files are kept in the repository; this script documents
 // how they were made and remakes them (box.drc is cut out of ../shared/data/meshes/Box_Draco.glb):
 //   node tests/fuzz/make_corpus.mjs
 import { mkdirSync, readFileSync, writeFileSync } from 'node:fs';
@@ -96,7 +96,7 @@ write('ply', 'tetra_ascii.ply', plyHeader('ascii') + tetra.v.map((p) => p.join('
 }
 write('ply', 'strip_ascii.ply', plyHeader('ascii', 'tristrips', 'vertex_indices') + tetra.v.map((p) => p.join(' ')).join('\n') + '\n6 0 1 2 3 -1 0\n');
 {
-  // Issue 13's one-pass PLY reader: big-endian doubles (one needing all 52 mantissa bits), a
+  // What the one-pass PLY reader must handle: big-endian doubles (one needing all 52 mantissa bits), a
   // skipped vertex property, ushort list lengths with uint indices, a list property skipped after
   // the indices and an element after the faces that is never read.
   const header =

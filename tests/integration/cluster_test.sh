@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The cluster end to end (issue 11): scripts/cluster.sh up with 3 replicas on free loopback
+# The cluster end to end: scripts/cluster.sh up with 3 replicas on free loopback
 # ports (real nginx, real Redis), meshes uploaded through nginx, lines computed; one replica
 # SIGKILLed and every session still answers with identical lines (its meshes rebuilt from Redis
 # by another replica); the whole cluster restarted and every session answers again; one mesh

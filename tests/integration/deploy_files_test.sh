@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# What can be checked of docker/ and deploy/ without a Docker engine (issue 11): the nginx
+# What can be checked of docker/ and deploy/ without a Docker engine: the nginx
 # template renders and passes `nginx -t` as the compose file renders it; the compose file and
 # the Kubernetes manifests parse and describe the topology (3 replicas on the Redis store,
 # /healthz probes, hashing on the mesh id, nginx/ingress edge limits); the image is multi-stage

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Hostile clients against the real featureline-server (issue 10): amplifying uploads, non-UTF-8
+# Hostile clients against the real featureline-server: amplifying uploads, non-UTF-8
 # error text with a request smuggled in the body, duplicate Content-Length, Range, Expect:
 # 100-continue, header floods, oversized bodies on JSON routes, slowloris, the connection limit,
 # the listen backlog, and SIGTERM with a slow sender connected. Raw connections use bash's

@@ -300,6 +300,16 @@ check_eq "re-uploaded mesh.glb keeps 6475 vertices, 12946 faces" "$(jq -r '"\(.v
 http "$T/curv.json" "$B/v1/meshes/$F/curvature"
 expect "GET curvature (JSON)" 200 - GET "/v1/meshes/$F/curvature" "$T/curv.json"
 check_eq "curvature: one value per vertex" "$(jq -c '[.vertices, (.curvature | length)]' "$T/curv.json")" "[6475,6475]"
+http "$T/features.json" "$B/v1/meshes/$F/features"
+expect "GET features" 200 - GET "/v1/meshes/$F/features" "$T/features.json"
+check_eq "features: fandisk's 34 crease chains, as the CLI finds them" "$(jq '.crease_chains|length' "$T/features.json")" 34
+http "$T/features5.json" "$B/v1/meshes/$F/features?max_crease_chains=5&corner_angle=180"
+check_eq "features with query options: 5 chains" "$(jq '.crease_chains|length' "$T/features5.json")" 5
+http "$T/features-bad.json" "$B/v1/meshes/$F/features?corner_angel=10"
+expect "features with a misspelt option: 400 naming it" 400 invalid_request GET "/v1/meshes/$F/features" "$T/features-bad.json"
+check "... naming it" grep -q 'unknown option \\"corner_angel\\"' "$T/features-bad.json"
+http "$T/features-range.json" "$B/v1/meshes/$F/features?spacing=-1"
+expect "features with an option out of range: 400" 400 invalid_request GET "/v1/meshes/$F/features" "$T/features-range.json"
 http "$T/curv.bin" -H 'Accept: application/octet-stream' "$B/v1/meshes/$F/curvature"
 check_eq "GET curvature (octet-stream): 200" "$STATUS" 200
 check_eq "curvature octet-stream: Content-Type" "$(header "$T/curv.bin" Content-Type)" application/octet-stream

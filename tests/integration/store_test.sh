@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Durable sessions of one featureline-server (issue 11), the real binary driven with curl:
+# Durable sessions of one featureline-server, the real binary driven with curl:
 # restarted with the same --data-dir it keeps its sessions (identical lines) and remembers
 # deletes; eviction costs a rebuild, not the session; a full store (--store-max-mb) and an
 # unreachable Redis answer 503 with their codes and keep nothing; idle uploads expire from the

@@ -63,7 +63,7 @@ TEST(HttpErrors, ClientBytesAreEscapedInMessages) {
 
 TEST(HttpErrors, InvalidUtf8NeverBreaksTheErrorBody) {
   // ?format=%FF once put the byte 0xFF into a message: serialising threw and the refusal's
-  // connection close was skipped (issue 10).
+  // connection close was skipped, so a body smuggled behind it was parsed as a request.
   const ErrorReply r{415, "unsupported_format", "unknown format \"\xff\"", {}};
   std::string body;
   ASSERT_NO_THROW(body = r.body());

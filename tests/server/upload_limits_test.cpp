@@ -1,5 +1,5 @@
-// How far an upload may expand (engine/mesh_io.h read_limits_for), with the regression inputs of
-// issue 10 kept in tests/fuzz/corpus/ (made by tests/fuzz/make_regressions.mjs).
+// How far an upload may expand (engine/mesh_io.h read_limits_for), with the amplifying and
+// malformed inputs the fuzzers found kept in tests/fuzz/corpus/ (made by tests/fuzz/make_corpus.mjs).
 #include <gtest/gtest.h>
 
 #include <fstream>

@@ -1,4 +1,4 @@
-// The upload store (issue 11): the directory backend, the Redis backend against a real
+// The upload store (sessions that survive restarts and replicas): the directory backend, the Redis backend against a real
 // redis-server started here on a free loopback port, and DurableSessions (rebuild on a miss,
 // restarts, single flight, what a 404 says, nothing kept when the store refuses).
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Known-answer meshes and measures for accuracy tests and benchmarks (issue 9: the refined
+// Known-answer meshes and measures for accuracy tests and benchmarks (the refined
 // line must never be worse than the initial one on noisy scans and CAD creases):
 // reproducible Gaussian noise, a CAD-like rounded slab whose crease chains are known exactly,
 // in the skinny tessellation CAD exporters write and in a fine one, exact point-to-polyline

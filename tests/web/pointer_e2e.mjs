@@ -1,5 +1,5 @@
 #!/usr/bin/env node
-// End-to-end test of pointing at the mesh (issue 12): on a touch screen a tap places a key and
+// End-to-end test of pointing at the mesh: on a touch screen a tap places a key and
 // a finger dragged from a key's marker moves that key; on igea (269k triangles) the page's
 // picking (a triangle grid walked along the ray, web/src/raycast.js) finds the same face at the
 // same distance as three.js's raycast of every triangle, and the time per hover (pick, snap,

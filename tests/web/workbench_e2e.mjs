@@ -1,5 +1,5 @@
 #!/usr/bin/env node
-// End-to-end test of the page as a tool people work in all day (issue 12): picking keys close
+// End-to-end test of the page as a tool people work in all day: picking keys close
 // together and snapping them to features, undo and redo, confirmations, out-of-date marking,
 // 1-based numbering, retries after 503 and network failures, session save and load, re-creating
 // lines after the server forgot the mesh, the up axis of the bunny, CAD display, double-click
@@ -457,7 +457,7 @@ await h.run(async () => {
   check(s.upAxis === 'y' && st.cameraUp[1] === 1 && top.y < bottom.y - 100,
     `the bunny opens Y-up: its top (max y) is ${Math.round(bottom.y - top.y)} px above its bottom on screen`, () => JSON.stringify({ up: s.upAxis, cam: st.cameraUp, top, bottom }));
   check(!s.cad && !st.flatShading, 'the bunny scan is smooth-shaded');
-  // Issue 12's target: the page's mesh download (the compact GLB, gzip) under 35% of the float
+  // The target: the page's mesh download (the compact GLB, gzip) under 35% of the float
   // mesh.glb's bytes. Quantised positions hardly compress further, so gzip alone saves ~12% now
   // (the old check, wire < 0.8 x decoded, was for the float GLB).
   const floatGlbBytes = (await (await fetch(`${h.base}/v1/meshes/${s.meshId}/mesh.glb`)).arrayBuffer()).byteLength;

@@ -1,0 +1,355 @@
+#include "engine/feature_seeds.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <Eigen/Dense>
+
+#include "engine/errors.h"
+#include "engine/internal/geometry.h"
+#include "engine/internal/stopwatch.h"
+
+namespace featureline {
+
+void check_feature_seed_options(const FeatureSeedOptions& options) {
+  using O = FeatureSeedOptions;
+  auto check = [](const ValidRange& range, double value, const char* name) {
+    if (!range.contains(value)) throw InvalidInputError(std::string(name) + " must be in " + describe(range));
+  };
+  check(O::max_crease_chains_range, options.max_crease_chains, "max_crease_chains");
+  check(O::min_chain_edges_range, options.min_chain_edges, "min_chain_edges");
+  check(O::corner_angle_range, options.corner_angle, "corner_angle");
+  check(O::max_vertices_per_sign_range, options.max_vertices_per_sign, "max_vertices_per_sign");
+  check(O::spacing_range, options.spacing, "spacing");
+  check(O::crease_clearance_range, options.crease_clearance, "crease_clearance");
+  check(O::min_strength_range, options.min_strength, "min_strength");
+  check(O::min_signal_to_noise_range, options.min_signal_to_noise, "min_signal_to_noise");
+}
+
+namespace {
+
+// A seed's crest test: the fitted field's peak across the crest lies within this many local
+// edge lengths of the vertex. Of the vertices either side of a crest that runs between them,
+// one is always this close, so every crest has vertices that pass.
+constexpr double kCrestOffset = 0.5;
+// Within the two rings, no vertex within 45 degrees of the across direction (cosine below) has
+// a feature value more than this share above the vertex's: on noisy fields the fit alone
+// passes the odd flank vertex (in 6 ridge fields at 0-30% noise, one of 120 seeds, 3.7 grid
+// spacings off the crest; none at any share from 0.05 to 0.2).
+constexpr double kAcrossCone = 0.70710678118654752;
+constexpr double kAcrossRise = 0.1;
+// An isolated peak rather than a line: the field falls along its slowest direction at least
+// this share as fast as across (then no crest direction is reported).
+constexpr double kPeakRatio = 0.5;
+
+double crease_sign_value(FeatureSign sign) { return sign == FeatureSign::ridge ? 1.0 : -1.0; }
+
+// The adjacency entry of edge v -> w (in v's row), or kNoIndex.
+std::uint32_t entry_of(const PreparedMesh& mesh, std::uint32_t v, std::uint32_t w) {
+  for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k)
+    if (mesh.neighbors[k] == w) return k;
+  return kNoIndex;
+}
+
+// The angle between the normals of edge (v, w)'s two faces, radians (0: flat), as the curvature
+// stage measures it when it marks creases; 0 unless the edge has exactly two faces.
+double dihedral_angle(const PreparedMesh& mesh, std::uint32_t v, std::uint32_t w) {
+  const auto& P = mesh.positions;
+  Eigen::Vector3d normals[2];
+  int found = 0;
+  for (auto f = mesh.vertex_faces.begin(v); f != mesh.vertex_faces.end(v); ++f) {
+    const Triangle& t = mesh.triangles[*f];
+    if (corner_of(t, w) < 0) continue;
+    if (found < 2) normals[found] = (P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]);
+    ++found;
+  }
+  return found == 2 ? angle_between(normals[0], normals[1]) : 0.0;
+}
+
+// The crease edges of one sign as the chain walk reads them: each vertex's entries of that
+// sign, sorted by neighbour id so walks do not depend on the adjacency's circulator order.
+struct SignedCreaseEdges {
+  std::vector<std::uint32_t> offsets, entries;  ///< entries of v: entries[offsets[v] .. offsets[v+1])
+  std::size_t degree(std::uint32_t v) const { return offsets[v + 1] - offsets[v]; }
+};
+
+SignedCreaseEdges signed_crease_edges(const PreparedMesh& mesh, std::int8_t sign) {
+  const std::size_t n = mesh.n_vertices();
+  SignedCreaseEdges edges;
+  edges.offsets.assign(n + 1, 0);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k)
+      if (mesh.curvature.crease[k] == sign) edges.entries.push_back(k);
+    edges.offsets[v + 1] = std::uint32_t(edges.entries.size());
+    std::sort(edges.entries.begin() + edges.offsets[v], edges.entries.end(),
+              [&](std::uint32_t a, std::uint32_t b) { return mesh.neighbors[a] < mesh.neighbors[b]; });
+  }
+  return edges;
+}
+
+// Maximal chains of the crease edges of `sign`, split at junctions and sharp corners, appended
+// to `chains` (vertices, closed, sign and length; the dihedral angle is measured later, for the
+// chains returned only).
+void walk_crease_chains(const PreparedMesh& mesh, FeatureSign sign, double corner_radians,
+                        std::vector<CreaseChainSeed>& chains, FeatureSeedStatistics& stats, const Cancellation* cancel) {
+  const auto& P = mesh.positions;
+  const std::size_t n = mesh.n_vertices();
+  const SignedCreaseEdges edges = signed_crease_edges(mesh, std::int8_t(crease_sign_value(sign)));
+  if (edges.entries.empty()) return;
+  std::vector<char> split(n, 0);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    const std::size_t degree = edges.degree(v);
+    if (degree == 0) continue;
+    if (degree != 2) {
+      split[v] = 1;
+      stats.junctions += degree > 2;
+      continue;
+    }
+    const auto a = mesh.neighbors[edges.entries[edges.offsets[v]]], b = mesh.neighbors[edges.entries[edges.offsets[v] + 1]];
+    if (angle_between(P[v] - P[a], P[b] - P[v]) > corner_radians) split[v] = 1, ++stats.corners;
+  }
+  std::vector<char> used(mesh.neighbors.size(), 0);
+  auto mark_used = [&](std::uint32_t v, std::uint32_t k) {
+    used[k] = 1;
+    const auto twin = entry_of(mesh, mesh.neighbors[k], v);
+    if (twin != kNoIndex) used[twin] = 1;
+  };
+  // From `start` along entry k until a split vertex or back at `start`; every step uses an
+  // unused edge, so a walk ends within the number of crease edges.
+  auto walk = [&](std::uint32_t start, std::uint32_t k) {
+    CreaseChainSeed chain;
+    chain.sign = sign;
+    chain.vertices.push_back(start);
+    std::uint32_t current = start;
+    while (true) {
+      mark_used(current, k);
+      const auto next = mesh.neighbors[k];
+      chain.length += mesh.neighbor_edge_lengths[k];
+      if (next == start) {
+        chain.closed = true;
+        break;
+      }
+      chain.vertices.push_back(next);
+      if (split[next]) break;
+      std::uint32_t following = kNoIndex;
+      for (auto i = edges.offsets[next]; i < edges.offsets[next + 1] && following == kNoIndex; ++i)
+        if (!used[edges.entries[i]]) following = edges.entries[i];
+      if (following == kNoIndex) break;
+      current = next;
+      k = following;
+    }
+    chains.push_back(std::move(chain));
+  };
+  for (std::uint32_t v = 0; v < n; ++v) {
+    if ((v & 4095) == 0) throw_if_cancelled(cancel);
+    if (!split[v]) continue;
+    for (auto i = edges.offsets[v]; i < edges.offsets[v + 1]; ++i)
+      if (!used[edges.entries[i]]) walk(v, edges.entries[i]);
+  }
+  // Cycles without a split vertex: from their lowest id towards its lower neighbour.
+  for (std::uint32_t v = 0; v < n; ++v)
+    if (edges.degree(v) == 2 && !used[edges.entries[edges.offsets[v]]]) walk(v, edges.entries[edges.offsets[v]]);
+}
+
+double length_weighted_dihedral_degrees(const PreparedMesh& mesh, const CreaseChainSeed& chain) {
+  double sum = 0, weight = 0;
+  const std::size_t m = chain.vertices.size();
+  for (std::size_t i = 0; i < chain.edges(); ++i) {
+    const auto a = chain.vertices[i], b = chain.vertices[(i + 1) % m];
+    const double length = (mesh.positions[b] - mesh.positions[a]).norm();
+    sum += length * dihedral_angle(mesh, a, b);
+    weight += length;
+  }
+  return weight > 0 ? sum / weight * 180 / kPi : 0.0;
+}
+
+struct CrestTest {
+  bool on_crest = false;
+  std::optional<Eigen::Vector3d> direction;
+};
+
+// Breadth-first scratch for the two-ring neighbourhoods of the crest fits.
+struct RingScratch {
+  std::vector<std::uint32_t> stamp, hood, frontier, next;
+  std::uint32_t generation = 0;
+};
+
+// Is v on a crest of the feature field of `sign`? The field over v's two rings (vertices on
+// creases left out and not passed through: across a crease lies another surface) is fitted by a
+// quadratic in v's tangent plane, in units of its local edge length h. Across the crest (the
+// Hessian's most negative direction) the fitted parabola's peak must lie within kCrestOffset,
+// the field must not rise faster along than it falls across, and no vertex across may be
+// clearly stronger than v. The crest's direction is the Hessian's other eigenvector.
+CrestTest test_crest(const PreparedMesh& mesh, std::uint32_t v, double sign, RingScratch& scratch) {
+  CrestTest test;
+  const auto& P = mesh.positions;
+  const Eigen::Vector3d normal = mesh.vertex_normals[v];
+  const double h = local_edge_length(mesh, v);
+  if (!(normal.squaredNorm() > 0) || !(h > 0)) return test;
+  if (++scratch.generation == 0) std::fill(scratch.stamp.begin(), scratch.stamp.end(), 0), scratch.generation = 1;
+  scratch.hood.assign(1, v);
+  scratch.frontier.assign(1, v);
+  scratch.stamp[v] = scratch.generation;
+  for (int ring = 0; ring < 2; ++ring) {
+    scratch.next.clear();
+    for (auto u : scratch.frontier)
+      for (auto k = mesh.neighbor_offsets[u]; k < mesh.neighbor_offsets[u + 1]; ++k) {
+        const auto w = mesh.neighbors[k];
+        if (scratch.stamp[w] == scratch.generation) continue;
+        scratch.stamp[w] = scratch.generation;
+        if (mesh.curvature.on_crease[w]) continue;
+        scratch.hood.push_back(w);
+        scratch.next.push_back(w);
+      }
+    scratch.frontier.swap(scratch.next);
+  }
+  if (scratch.hood.size() < 8) return test;
+  const Eigen::Vector3d u = normal.unitOrthogonal(), w = normal.normalized().cross(u);
+  Eigen::MatrixXd A(scratch.hood.size(), 6);
+  Eigen::VectorXd values(scratch.hood.size());
+  for (std::size_t i = 0; i < scratch.hood.size(); ++i) {
+    const Eigen::Vector3d d = (P[scratch.hood[i]] - P[v]) / h;
+    const double x = d.dot(u), y = d.dot(w);
+    A.row(Eigen::Index(i)) << 1, x, y, 0.5 * x * x, x * y, 0.5 * y * y;
+    values[Eigen::Index(i)] = feature_value(mesh.curvature, scratch.hood[i], sign);
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  if (qr.rank() < 6) return test;
+  const Eigen::VectorXd c = qr.solve(values);
+  Eigen::Matrix2d hessian;
+  hessian << c[3], c[4], c[4], c[5];
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(hessian);
+  const double across = eigen.eigenvalues()[0], along = eigen.eigenvalues()[1];
+  // A crest falls across it faster than it rises along it; the other way round is a saddle of
+  // the field (where k_max turns from one direction to the other on a bent ridge's inner side).
+  if (!(across < 0) || !(along <= -across)) return test;
+  const Eigen::Vector2d gradient(c[1], c[2]);
+  const double offset = -gradient.dot(eigen.eigenvectors().col(0)) / across;
+  if (!(std::abs(offset) <= kCrestOffset)) return test;
+  // The fit can pass a flank vertex of a noisy field; the field's own values across the crest
+  // must not rise much above v's anywhere within the two rings.
+  const Eigen::Vector2d across_direction = eigen.eigenvectors().col(0);
+  for (Eigen::Index i = 1; i < A.rows(); ++i) {
+    const Eigen::Vector2d d(A(i, 1), A(i, 2));
+    if (std::abs(d.dot(across_direction)) >= kAcrossCone * d.norm() && values[i] > (1 + kAcrossRise) * values[0])
+      return test;
+  }
+  test.on_crest = true;
+  if (!(along < kPeakRatio * across)) {
+    const Eigen::Vector2d t = eigen.eigenvectors().col(1);
+    Eigen::Vector3d direction = (t.x() * u + t.y() * w).normalized();
+    Eigen::Index largest = 0;
+    direction.cwiseAbs().maxCoeff(&largest);
+    if (direction[largest] < 0) direction = -direction;
+    test.direction = direction;
+  }
+  return test;
+}
+
+// Per vertex: whether it is within `rings` rings of edges of a crease vertex or a boundary
+// vertex (breadth-first from all of them at once; each vertex is reached once).
+std::vector<char> near_creases_or_boundary(const PreparedMesh& mesh, int rings) {
+  const std::size_t n = mesh.n_vertices();
+  std::vector<char> near(n, 0);
+  std::vector<std::uint32_t> frontier, next;
+  for (std::uint32_t v = 0; v < n; ++v)
+    if (mesh.curvature.on_crease[v] || mesh.boundary_vertex[v]) near[v] = 1, frontier.push_back(v);
+  for (int ring = 0; ring < rings && !frontier.empty(); ++ring) {
+    next.clear();
+    for (auto u : frontier)
+      for (auto k = mesh.neighbor_offsets[u]; k < mesh.neighbor_offsets[u + 1]; ++k)
+        if (!near[mesh.neighbors[k]]) near[mesh.neighbors[k]] = 1, next.push_back(mesh.neighbors[k]);
+    frontier.swap(next);
+  }
+  return near;
+}
+
+// The seeds of one sign: candidates strongest first, each taken when it is far enough from the
+// seeds already taken and passes the crest test (fitted only for candidates not suppressed).
+std::vector<FeatureVertexSeed> find_vertex_seeds(const PreparedMesh& mesh, FeatureSign sign, const FeatureSeedOptions& options,
+                                                 const std::vector<char>& excluded, RingScratch& scratch,
+                                                 std::size_t& candidate_count, const Cancellation* cancel) {
+  std::vector<FeatureVertexSeed> seeds;
+  if (options.max_vertices_per_sign == 0) return seeds;
+  const CurvatureField& field = mesh.curvature;
+  const double s = crease_sign_value(sign);
+  const double radius = field.radius > 0 ? field.radius : 1.0;
+  // The noise floor k >= 2 m sigma / (R^2 h) (see FeatureSeedOptions::min_signal_to_noise), as
+  // a factor of 1/h.
+  const double floor_times_h = 2 * options.min_signal_to_noise * field.noise / (radius * radius);
+  std::vector<std::pair<double, std::uint32_t>> candidates;  // (strength, vertex)
+  for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
+    if (mesh.component[v] < 0 || excluded[v]) continue;
+    const double value = feature_value(field, v, s);
+    const double strength = value / mesh.curvature_scale;
+    if (!(value > 0) || !(strength >= options.min_strength)) continue;
+    if (floor_times_h > 0 && !(value * local_edge_length(mesh, v) >= floor_times_h)) continue;
+    candidates.emplace_back(strength, v);
+  }
+  candidate_count = candidates.size();
+  std::sort(candidates.begin(), candidates.end(),
+            [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
+  std::vector<double> suppression_radius;
+  for (std::size_t i = 0; i < candidates.size() && seeds.size() < std::size_t(options.max_vertices_per_sign); ++i) {
+    if ((i & 4095) == 0) throw_if_cancelled(cancel);
+    const auto [strength, v] = candidates[i];
+    bool suppressed = false;
+    for (std::size_t j = 0; j < seeds.size() && !suppressed; ++j)
+      suppressed = (mesh.positions[v] - mesh.positions[seeds[j].vertex]).norm() < suppression_radius[j];
+    if (suppressed) continue;
+    const CrestTest crest = test_crest(mesh, v, s, scratch);
+    if (!crest.on_crest) continue;
+    FeatureVertexSeed seed;
+    seed.vertex = v;
+    seed.sign = sign;
+    seed.curvature = sign == FeatureSign::ridge ? field.k_max[v] : field.k_min[v];
+    seed.strength = strength;
+    seed.direction = crest.direction;
+    seeds.push_back(seed);
+    suppression_radius.push_back(options.spacing * local_edge_length(mesh, v));
+  }
+  return seeds;
+}
+
+}  // namespace
+
+FeatureSeeds find_feature_seeds(const PreparedMesh& mesh, const FeatureSeedOptions& options, const Cancellation* cancel) {
+  check_feature_seed_options(options);
+  auto clock = StageClock::now();
+  FeatureSeeds seeds;
+  FeatureSeedStatistics& stats = seeds.stats;
+
+  std::vector<CreaseChainSeed> chains;
+  const double corner_radians = options.corner_angle * kPi / 180;
+  for (auto sign : {FeatureSign::ridge, FeatureSign::valley}) walk_crease_chains(mesh, sign, corner_radians, chains, stats, cancel);
+  const auto too_short = [&](const CreaseChainSeed& c) { return c.edges() < std::size_t(options.min_chain_edges); };
+  const auto kept_end = std::stable_partition(chains.begin(), chains.end(), [&](const auto& c) { return !too_short(c); });
+  stats.short_chains = std::size_t(chains.end() - kept_end);
+  chains.erase(kept_end, chains.end());
+  stats.crease_chains = chains.size();
+  // A total order, so equal lengths (a symmetric part's chains) come out the same every run.
+  std::sort(chains.begin(), chains.end(), [](const CreaseChainSeed& a, const CreaseChainSeed& b) {
+    if (a.length != b.length) return a.length > b.length;
+    if (a.vertices.front() != b.vertices.front()) return a.vertices.front() < b.vertices.front();
+    if (a.sign != b.sign) return a.sign == FeatureSign::ridge;
+    return a.vertices < b.vertices;
+  });
+  if (chains.size() > std::size_t(options.max_crease_chains)) chains.resize(std::size_t(options.max_crease_chains));
+  for (auto& chain : chains) chain.dihedral_degrees = length_weighted_dihedral_degrees(mesh, chain);
+  seeds.crease_chains = std::move(chains);
+
+  RingScratch scratch;
+  scratch.stamp.assign(mesh.n_vertices(), 0);
+  const std::vector<char> excluded = near_creases_or_boundary(mesh, options.crease_clearance);
+  seeds.ridge_vertices = find_vertex_seeds(mesh, FeatureSign::ridge, options, excluded, scratch, stats.ridge_candidates, cancel);
+  seeds.valley_vertices =
+      find_vertex_seeds(mesh, FeatureSign::valley, options, excluded, scratch, stats.valley_candidates, cancel);
+  const double radius = mesh.curvature.radius > 0 ? mesh.curvature.radius : 1.0;
+  stats.noise_floor_strength = 2 * options.min_signal_to_noise * mesh.curvature.noise /
+                               (radius * radius * mesh.statistics.mean_edge_length) / mesh.curvature_scale;
+  stats.elapsed_ms = lap_ms(clock);
+  return seeds;
+}
+
+}  // namespace featureline

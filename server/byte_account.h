@@ -1,0 +1,56 @@
+// A byte budget shared by concurrent requests (upload bodies being received, parsed JSON bodies):
+// each request holds what it uses and gives it back when done, so their total stays bounded
+// however many arrive at once.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+
+namespace featureline::server {
+
+class ByteAccount {
+ public:
+  explicit ByteAccount(std::size_t capacity) : capacity_(capacity) {}
+
+  /// Takes `bytes` if they fit; false (nothing taken) otherwise.
+  bool try_take(std::size_t bytes) {
+    std::size_t used = used_.load();
+    do {
+      if (bytes > capacity_ || used > capacity_ - bytes) return false;
+    } while (!used_.compare_exchange_weak(used, used + bytes));
+    return true;
+  }
+  void give_back(std::size_t bytes) { used_ -= bytes; }
+
+  std::size_t used() const { return used_.load(); }
+  std::size_t capacity() const { return capacity_; }
+
+ private:
+  const std::size_t capacity_;
+  std::atomic<std::size_t> used_{0};
+};
+
+/// What one request holds of an account; given back when it goes.
+class ByteHold {
+ public:
+  explicit ByteHold(ByteAccount& account) : account_(account) {}
+  ~ByteHold() { account_.give_back(bytes_); }
+  ByteHold(const ByteHold&) = delete;
+  ByteHold& operator=(const ByteHold&) = delete;
+
+  /// Holds `total` bytes in all (more or fewer than now); false when more do not fit (the
+  /// hold is unchanged then).
+  bool hold(std::size_t total) {
+    if (total > bytes_ && !account_.try_take(total - bytes_)) return false;
+    if (total < bytes_) account_.give_back(bytes_ - total);
+    bytes_ = total;
+    return true;
+  }
+  std::size_t bytes() const { return bytes_; }
+
+ private:
+  ByteAccount& account_;
+  std::size_t bytes_ = 0;
+};
+
+}  // namespace featureline::server
