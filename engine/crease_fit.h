@@ -4,7 +4,7 @@
 // On a clean mesh a crease run is the feature itself and is kept exactly (feature_line.cpp). On
 // a noisy one its vertices scatter about the true crease by the noise, and the snake cannot help:
 // its force reads a feature field that is sharpest exactly on those scattered crease edges, so it
-// either stays on them or, through a bend, cuts across the sheets (issue 9 measured the snake's
+// either stays on them or, through a bend, cuts across the sheets (measured: the snake's
 // line 0.97-1.05x the initial line's distance to the true crease). The true crease is a smooth
 // space curve; the noise is independent from vertex to vertex. A local quadratic regression of
 // the chain's positions against arc length (Gaussian weights) averages the noise out along the

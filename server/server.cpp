@@ -204,7 +204,7 @@ struct FeaturelineServer::Impl {
   }
 
   // glibc keeps freed heap pages (and per-thread arenas) mapped: after sessions are deleted,
-  // expired or evicted, RSS stayed at the peak (234 MB after deleting everything, issue 10).
+  // expired or evicted, RSS stayed at the peak (234 MB after deleting everything).
   // malloc_trim hands them back; it runs on the sweeper, only after the cache shrank.
   std::size_t bytes_at_last_trim = 0;
   void return_freed_memory() {
