@@ -210,8 +210,15 @@ validate_gltf "Accept model/gltf+json: passes the glTF validator" "$T/g3.gltf"
 QUERY='?format=json' lines "$T/l5.json" "$T/r1.json" -H 'Accept: model/gltf-binary'
 expect "?format=json wins over Accept" 200 - POST "$FL" "$T/l5.json"
 check_eq "?format=json answers JSON" "$(header "$T/l5.json" Content-Type)" application/json
-QUERY='?format=obj' lines "$T/l6.json" "$T/r1.json"
-expect "?format=obj on feature-lines" 400 invalid_request POST "$FL" "$T/l6.json"
+QUERY='?format=stl' lines "$T/l6.json" "$T/r1.json"
+expect "?format=stl on feature-lines" 400 invalid_request POST "$FL" "$T/l6.json"
+check "... naming the formats lines can be" grep -q 'format must be json, glb, gltf, obj, ply, polylines' "$T/l6.json"
+QUERY='?format=obj' lines "$T/l7.obj" "$T/r1.json"
+check_eq "?format=obj on feature-lines: 200" "$STATUS" 200
+check_eq "?format=obj: Content-Type model/obj" "$(header "$T/l7.obj" Content-Type)" model/obj
+check_eq "?format=obj: one l record per line" "$(grep -c '^l ' "$T/l7.obj")" 1
+QUERY='?format=polylines' lines "$T/l8.txt" "$T/r1.json"
+check_eq "?format=polylines: one polyline, its count first" "$(awk '{ print (NF - 1) / 3 == $1 }' "$T/l8.txt")" 1
 # The contract: glTF answers hold the lines only (to overlay on mesh.glb): no triangles, a
 # LINE_STRIP per initial and refined line, and a node feature_line_<i> per line.
 check_eq "glTF answer holds no triangle primitive" \
