@@ -125,18 +125,23 @@ stop_server() {
 }
 
 # Kills what this script started (servers and background requests), by process id.
-cleanup() {
-  local pid
-  for pid in "${BG_PIDS[@]}"; do kill "$pid" 2>/dev/null; done
-  for pid in "${SRV_PID[@]}"; do kill -TERM "$pid" 2>/dev/null; done
-  local i
-  for i in $(seq 1 30); do
+# stop_pids TRIES PID...: SIGTERM to each, up to TRIES x 0.1 s for all to exit, then SIGKILL.
+stop_pids() {
+  local tries=$1 pid; shift
+  for pid in "$@"; do kill -TERM "$pid" 2>/dev/null; done
+  for _ in $(seq 1 "$tries"); do
     local alive=0
-    for pid in "${SRV_PID[@]}"; do kill -0 "$pid" 2>/dev/null && alive=1; done
+    for pid in "$@"; do kill -0 "$pid" 2>/dev/null && alive=1; done
     [ $alive = 0 ] && break
     sleep 0.1
   done
-  for pid in "${SRV_PID[@]}"; do kill -KILL "$pid" 2>/dev/null; done
+  for pid in "$@"; do kill -KILL "$pid" 2>/dev/null; done
+}
+
+cleanup() {
+  local pid
+  for pid in "${BG_PIDS[@]}"; do kill "$pid" 2>/dev/null; done
+  stop_pids 30 "${SRV_PID[@]}"
   wait 2>/dev/null
   if [ -n "${TMP:-}" ] && [ -d "$TMP" ]; then
     if [ "${KEEP_TMP:-0}" = 1 ]; then echo "(kept $TMP)"; else rm -rf "$TMP"; fi

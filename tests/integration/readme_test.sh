@@ -20,15 +20,7 @@ LOG_SEEN=()       # access-log lines already checked, by the same index
 CREATED=()        # files the blocks named that did not exist before: removed at the end
 
 stop_started() {
-  local pid
-  for pid in "${STARTED[@]}"; do kill -TERM "$pid" 2>/dev/null; done
-  for _ in $(seq 1 100); do
-    local alive=0
-    for pid in "${STARTED[@]}"; do kill -0 "$pid" 2>/dev/null && alive=1; done
-    [ $alive = 0 ] && break
-    sleep 0.1
-  done
-  for pid in "${STARTED[@]}"; do kill -KILL "$pid" 2>/dev/null; done
+  stop_pids 100 "${STARTED[@]}"
   STARTED=(); STARTED_LOGS=(); LOG_SEEN=()
 }
 path_of() { case "$1" in /*) echo "$1" ;; *) echo "$ROOT/$1" ;; esac; }
