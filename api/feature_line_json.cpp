@@ -89,6 +89,7 @@ json mesh_info_to_json(const PreparedMesh& m, double load_ms) {
       {"unreferenced_vertices", s.unreferenced_vertices},
       {"dropped_faces", s.dropped_faces},
       {"duplicated_vertices", s.duplicated_vertices},
+      {"repeated_faces", s.repeated_faces},
       {"bbox", {{"min", s.bbox_min}, {"max", s.bbox_max}}},
       {"mean_edge", s.mean_edge_length},
       {"curvature",

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Memory of featureline-server under hostile clients (header floods, stalled uploads, many
-# uploads into a small cache, deletes): prints resident memory
+# Memory of featureline-server under hostile clients (header floods, stalled uploads, files that
+# expand, JSON bodies of tiny containers, many uploads into a small cache, deletes): prints
+# resident memory
 # (VmRSS) after each case and its peak during the case (VmHWM, reset before each case).
 #   bash bench/hostile_memory.sh [SERVER]        (default build/server/featureline-server)
 # The server runs with --cache-mb 64 and its other defaults (256 MiB uploads, 512 MiB upload
@@ -41,6 +42,33 @@ done
 sleep 2.5
 row "4 uploads of 200 MB stalled after 100 MB (2 get 503)"
 wait "${uploads[@]}"
+expanding() {  # expanding LABEL FILE: one upload of FILE, its status and time in the row
+  local start answer
+  start=$(date +%s.%N)
+  answer=$(curl -s -o /dev/null -w '%{http_code}' --max-time 60 --data-binary @"$2" -H 'Content-Type: application/octet-stream' "$base/v1/meshes")
+  row "$(awk -v l="$1" -v a="$answer" -v s="$start" -v e="$(date +%s.%N)" 'BEGIN { printf "%s: %s in %.1f s", l, a, e - s }')"
+}
+hostile=tests/support/hostile_meshes.py
+reset_peak; python3 $hostile repeated-ply 400000 "$tmp/r400k.ply"; expanding "PLY, one triangle x 400,000 (5 MB)" "$tmp/r400k.ply"
+reset_peak; python3 $hostile repeated-ply 8000000 "$tmp/r8m.ply"; expanding "PLY, one triangle x 8,000,000 (104 MB)" "$tmp/r8m.ply"
+reset_peak; python3 $hostile repeated-glb 40 "$tmp/r40.glb"; expanding "GLB, 40 primitives x 10,000 repeats (120 KB)" "$tmp/r40.glb"
+reset_peak; python3 $hostile repeated-glb 800 "$tmp/r800.glb"; expanding "GLB, 800 primitives x 10,000 repeats (120 KB)" "$tmp/r800.glb"
+reset_peak; python3 $hostile draco 33554432 100 "$tmp/d1.drc"; expanding "Draco declaring 33.5 M faces (80 B)" "$tmp/d1.drc"
+reset_peak; python3 $hostile draco 400000 200000 "$tmp/d2.drc"; expanding "Draco declaring 400 k faces, 200 k points (80 B)" "$tmp/d2.drc"
+rm -f "$tmp"/*.ply "$tmp"/*.glb "$tmp"/*.drc
+reset_peak
+python3 -c "
+import sys
+n = (4 * 1024 * 1024 - 20) // 3
+sys.stdout.write('{\"lines\": [' + ','.join(['{}'] * n) + ']}')" >"$tmp/containers.json"
+sample=$(curl -s --data-binary @samples/ridge_field.off -H 'Content-Type: model/x-off' "$base/v1/meshes" | jq -r .mesh_id)
+for i in $(seq 1 64); do
+  curl -s -o /dev/null --max-time 60 -H 'Content-Type: application/json' --data-binary @"$tmp/containers.json" \
+    "$base/v1/meshes/$sample/feature-lines" &
+done
+wait
+row "64 concurrent JSON bodies of 4 MiB of {} (413/503)"
+curl -s -o /dev/null -X DELETE "$base/v1/meshes/$sample"
 reset_peak
 ids=()
 for i in $(seq 1 12); do

@@ -12,6 +12,7 @@
 // exact position (first occurrence order).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -50,16 +51,34 @@ struct ReadMeshOptions {
   std::size_t max_triangles = 40'000'000;
   /// Refuse files larger than this when reading from a path (LimitExceededError).
   std::size_t max_file_bytes = std::size_t(2) << 30;
+  /// What the prepared mesh may cost (PreparedMesh::memory_bytes); 0: no bound. Formats that
+  /// declare their counts before their data (Draco) are refused from those counts when
+  /// prepared_bytes_lower_bound exceeds it, before anything is decoded; prepare_mesh is given
+  /// the same bound.
+  std::size_t memory_budget_bytes = 0;
 };
+
+/// A lower bound of PreparedMesh::memory_bytes for a mesh of `vertices` and `triangles`: per
+/// triangle at least 3 halfedges, 1.5 edges, the face, its corner, neighbour and adjacency
+/// entries (138 B by prepared_mesh.cpp's count); per vertex its point, position, normal,
+/// curvature and row offsets (118 B). Both rounded down, so a mesh above the bound can never
+/// fit a budget and is refused before it is decoded or prepared.
+constexpr std::size_t kPreparedBytesPerTriangle = 136;
+constexpr std::size_t kPreparedBytesPerVertex = 112;
+constexpr std::size_t prepared_bytes_lower_bound(std::size_t vertices, std::size_t triangles) {
+  constexpr std::size_t cap = std::size_t(1) << 56;  // declared counts may be absurd: no wrap-around
+  return std::min(vertices, cap) * kPreparedBytesPerVertex + std::min(triangles, cap) * kPreparedBytesPerTriangle;
+}
 
 /// Limits that tie how far a mesh may expand to what the caller accepts. No uncompressed
 /// encoding stores a vertex position or a triangle in fewer than 12 bytes (three floats, three
 /// 32-bit indices), so an honest input of `max_input_bytes` holds at most max_input_bytes / 12 of
-/// each (only Draco compresses further); and a prepared mesh counts well over 128 bytes per
-/// triangle against a cache budget (PreparedMesh::memory_bytes: 162-174 measured), so a mesh above
-/// `memory_budget_bytes` / 128 triangles could never be kept anyway. Both vertex records and triangles are capped at the smaller figure. Inputs that
-/// expand further (glTF nodes instancing one mesh many times, primitives sharing one accessor)
-/// are then refused with LimitExceededError before their geometry is allocated.
+/// each (only Draco compresses further); and a prepared mesh costs at least
+/// kPreparedBytesPerTriangle per triangle and kPreparedBytesPerVertex per vertex against
+/// `memory_budget_bytes` (which the options also carry), so more of either could never be kept.
+/// Inputs that expand further (glTF nodes instancing one mesh many times, primitives sharing one
+/// accessor, Draco's declared counts) are then refused with LimitExceededError before their
+/// geometry is allocated.
 ReadMeshOptions read_limits_for(std::size_t max_input_bytes, std::size_t memory_budget_bytes);
 
 /// A triangle soup with ids as described above; no topology yet (see prepare_mesh).

@@ -86,14 +86,63 @@ double percentile(std::vector<double> values, double q) {
   return values[k];
 }
 
+// True when a triangle over the same three vertices as `corners` (in either orientation) is
+// already in the mesh. Only asked for faces OpenMesh refused, so it costs nothing on clean meshes.
+bool repeats_a_face(const TriMesh& mesh, const std::vector<TriMesh::VertexHandle>& corners) {
+  for (auto f : mesh.vf_range(corners[0])) {
+    int shared = 0;
+    for (auto v : mesh.fv_range(f)) shared += v == corners[1] || v == corners[2];
+    if (shared == 2) return true;
+  }
+  return false;
+}
+
+// Refuses the mesh as soon as what is built so far shows it cannot fit the memory bound.
+void check_prepared_bound(const TriMesh& mesh, std::size_t max_bytes) {
+  if (max_bytes == 0) return;
+  const std::size_t needed = prepared_bytes_lower_bound(mesh.n_vertices(), mesh.n_faces());
+  if (needed > max_bytes)
+    throw LimitExceededError("the prepared mesh needs more than " + std::to_string(needed >> 20) + " MiB (" +
+                             std::to_string(mesh.n_vertices()) + " vertices and " + std::to_string(mesh.n_faces()) +
+                             " triangles so far), more than the " + std::to_string(max_bytes >> 20) + " MiB it may use");
+}
+
+void warn_dropped_faces(PreparedMesh& pm, std::size_t first_dropped, std::size_t first_repeated, std::size_t split_faces) {
+  const MeshStatistics& stats = pm.statistics;
+  if (stats.dropped_faces > 0) {
+    std::ostringstream msg;
+    msg << stats.dropped_faces << " degenerate triangle(s) with a repeated vertex index were dropped (first: input triangle "
+        << first_dropped << "); face ids after it are shifted down";
+    pm.warnings.push_back(msg.str());
+  }
+  if (stats.repeated_faces > 0) {
+    std::ostringstream msg;
+    msg << stats.repeated_faces << " triangle(s) over the same three vertices as an earlier one were dropped (first: input triangle "
+        << first_repeated << "); face ids after it are shifted down";
+    pm.warnings.push_back(msg.str());
+  }
+  if (split_faces > 0) {
+    std::ostringstream msg;
+    msg << split_faces << " triangle(s) would have made an edge or vertex non-manifold and were "
+        << "given their own copies of their vertices (" << stats.duplicated_vertices
+        << " vertices appended after the input's " << stats.file_vertices << ")";
+    pm.warnings.push_back(msg.str());
+  }
+}
+
 // Adds the soup's triangles to pm.mesh and pm.triangles in input order. OpenMesh refuses faces
 // that would make an edge or vertex non-manifold (its error stream is switched off in
 // prepare_mesh); like OpenMesh's own reader, we give such a face its own copies of the vertices
-// so it is kept and every id stays valid. Degenerate triangles (a repeated index) are dropped;
-// both are reported in pm.warnings.
-void add_triangles(const RawMesh& raw, PreparedMesh& pm, const Cancellation* cancel) {
+// so it is kept and every id stays valid. Degenerate triangles (a repeated index) and repeats of
+// a triangle already added are dropped (a repeat would take three vertex copies each: one
+// triangle repeated 8 million times had made 24 million vertices); all are reported in
+// pm.warnings. The memory bound is checked before the first face and every 4096 faces.
+void add_triangles(const RawMesh& raw, PreparedMesh& pm, std::size_t max_bytes, const Cancellation* cancel) {
   TriMesh& mesh = pm.mesh;
   MeshStatistics& stats = pm.statistics;
+  if (max_bytes != 0 && prepared_bytes_lower_bound(raw.positions.size(), 0) > max_bytes)
+    throw LimitExceededError("the mesh's " + std::to_string(raw.positions.size()) + " vertices alone need more than the " +
+                             std::to_string(max_bytes >> 20) + " MiB a prepared mesh may use");
   mesh.reserve(raw.positions.size(), raw.triangles.size() * 3 / 2, raw.triangles.size());
   for (const auto& p : raw.positions) {
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
@@ -101,12 +150,15 @@ void add_triangles(const RawMesh& raw, PreparedMesh& pm, const Cancellation* can
     mesh.add_vertex(TriMesh::Point(p[0], p[1], p[2]));
   }
   std::vector<TriMesh::VertexHandle> corners(3);
-  std::size_t first_dropped = SIZE_MAX;
+  std::size_t first_dropped = SIZE_MAX, first_repeated = SIZE_MAX;
   std::size_t split_faces = 0;
   pm.source_triangle.reserve(raw.triangles.size());
   pm.triangles.reserve(raw.triangles.size());
   for (std::uint32_t t = 0; t < raw.triangles.size(); ++t) {
-    if ((t & 4095) == 0) throw_if_cancelled(cancel);
+    if ((t & 4095) == 0) {
+      throw_if_cancelled(cancel);
+      check_prepared_bound(mesh, max_bytes);
+    }
     const auto& tri = raw.triangles[t];
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) {
       if (stats.dropped_faces++ == 0) first_dropped = t;
@@ -117,6 +169,10 @@ void add_triangles(const RawMesh& raw, PreparedMesh& pm, const Cancellation* can
     // an edge that is taken takes no other, and a fan it cannot re-link refuses the face.
     TriMesh::FaceHandle face = mesh.add_face(corners);
     if (!face.is_valid()) {
+      if (repeats_a_face(mesh, corners)) {
+        if (stats.repeated_faces++ == 0) first_repeated = t;
+        continue;
+      }
       for (int k = 0; k < 3; ++k) {
         const TriMesh::Point copy = mesh.point(corners[k]);  // add_vertex may reallocate the points
         corners[k] = mesh.add_vertex(copy);
@@ -128,19 +184,8 @@ void add_triangles(const RawMesh& raw, PreparedMesh& pm, const Cancellation* can
     pm.source_triangle.push_back(t);
     pm.triangles.push_back({std::uint32_t(corners[0].idx()), std::uint32_t(corners[1].idx()), std::uint32_t(corners[2].idx())});
   }
-  if (stats.dropped_faces > 0) {
-    std::ostringstream msg;
-    msg << stats.dropped_faces << " degenerate triangle(s) with a repeated vertex index were dropped (first: input triangle "
-        << first_dropped << "); face ids after it are shifted down";
-    pm.warnings.push_back(msg.str());
-  }
-  if (split_faces > 0) {
-    std::ostringstream msg;
-    msg << split_faces << " triangle(s) would have made an edge or vertex non-manifold (or duplicate another) and were "
-        << "given their own copies of their vertices (" << stats.duplicated_vertices
-        << " vertices appended after the input's " << stats.file_vertices << ")";
-    pm.warnings.push_back(msg.str());
-  }
+  check_prepared_bound(mesh, max_bytes);
+  warn_dropped_faces(pm, first_dropped, first_repeated, split_faces);
 }
 
 // Vertex adjacency in compressed rows with edge lengths beside it; the mean edge length and
@@ -329,7 +374,7 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
     // (serial, the largest part of this stage); the future is joined even when insertion throws.
     MeshStatistics counted;
     auto counting = std::async(std::launch::async, [&raw, &counted] { count_non_manifold(raw, counted); });
-    add_triangles(raw, pm, cancel);
+    add_triangles(raw, pm, options.max_memory_bytes, cancel);
     counting.get();
     stats.non_manifold_edges = counted.non_manifold_edges;
     stats.non_manifold_vertices = counted.non_manifold_vertices;

@@ -21,6 +21,10 @@ namespace featureline {
 
 struct PrepareOptions {
   CurvatureOptions curvature;  ///< the feature field and creases (engine/curvature.h)
+  /// Refuse (LimitExceededError) a mesh whose preparation could not stay within this many bytes
+  /// (prepared_bytes_lower_bound of the vertices and kept triangles, checked before anything is
+  /// built and again as vertex copies for non-manifold faces are made); 0: no bound.
+  std::size_t max_memory_bytes = 0;
 };
 
 /// Counts and measures of a prepared mesh, as `featureline info` and the server report them.
@@ -37,6 +41,7 @@ struct MeshStatistics {
   std::size_t unreferenced_vertices = 0;  ///< vertices used by no triangle
   std::size_t dropped_faces = 0;          ///< degenerate triangles (a repeated vertex index) not added
   std::size_t duplicated_vertices = 0;    ///< vertex copies added so non-manifold triangles fit
+  std::size_t repeated_faces = 0;         ///< triangles over the same three vertices as an earlier one, not added
   double mean_edge_length = 0;
   std::array<double, 3> bbox_min{0, 0, 0};
   std::array<double, 3> bbox_max{0, 0, 0};

@@ -211,13 +211,20 @@ StripPoint point_at_vertex(const VertexStarts& starts, const FlatStrip& flat, st
   return p;
 }
 
+// Pieces a gap of `ratio` spacings is cut into: at least 1 and at most `cap`, whatever a
+// degenerate strip gives (converting NaN or a huge ratio to int is undefined behaviour).
+int piece_count(double ratio, std::size_t cap) {
+  if (!(ratio >= 1)) return 1;  // below one spacing, or NaN
+  return int(std::min(ratio, double(std::min<std::size_t>(cap, 1 << 20))));
+}
+
 // The initial snake v_0 of Eq. (15): the flattened line P* (Eq. 11) resampled at spacing h.
 std::vector<StripPoint> initial_snake(const FeatureStrip& strip, const FlatStrip& flat, const VertexStarts& starts, double h) {
   std::vector<StripPoint> points;
   points.push_back(point_at_vertex(starts, flat, strip.line.front()));
   for (std::size_t i = 0; i + 1 < strip.line.size(); ++i) {
     const Eigen::Vector2d a = flat.uv[strip.line[i]], b = flat.uv[strip.line[i + 1]];
-    const int pieces = std::max(1, int(std::lround((b - a).norm() / h)));
+    const int pieces = piece_count(std::round((b - a).norm() / h), std::size_t(1) << 16);
     // Restart at each line vertex when it has a valid triangle; otherwise walk on from the
     // previous sample.
     StripPoint last = i == 0 || starts.triangle[strip.line[i]] < 0 ? points.back() : point_at_vertex(starts, flat, strip.line[i]);
@@ -261,7 +268,7 @@ void resample(const SnakeRun& run, std::vector<StripPoint>& points, double dampi
     const bool last = i + 1 == points.size();
     const double gap = (points[i].uv - next.back().uv).norm();
     if (!last && gap < 0.5 * h) continue;  // too close: delete
-    const int pieces = int(std::ceil(gap / h));
+    const int pieces = piece_count(std::ceil(gap / h), run.max_points);
     // Bounded work whatever the options: a line may at most quadruple its initial point count
     // (an extreme kappa once made it 209,204 points and 51 s; ../shared/data/regressions).
     const bool room = next.size() + (points.size() - i) + std::size_t(pieces) <= run.max_points;

@@ -151,7 +151,9 @@ MeshSession prepare_session(std::string_view bytes, MeshFormat format, const Rea
   MeshSession s;
   s.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   s.format = format;
-  s.mesh = prepare_mesh(std::move(raw), {}, cancel);
+  PrepareOptions options;
+  options.max_memory_bytes = limits.memory_budget_bytes;  // nothing is prepared that the cache could never keep
+  s.mesh = prepare_mesh(std::move(raw), options, cancel);
   s.bytes = s.mesh->memory_bytes();
   return s;
 }

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <new>
@@ -26,6 +27,12 @@ namespace featureline {
 namespace {
 
 using detail::is_space;
+
+std::string format_number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", x);
+  return text;
+}
 using detail::starts_with;
 using detail::trim;
 
@@ -126,15 +133,43 @@ std::optional<MeshFormat> sniff_mesh_format(std::string_view bytes) {
 
 ReadMeshOptions read_limits_for(std::size_t max_input_bytes, std::size_t memory_budget_bytes) {
   constexpr std::size_t min_bytes_per_element = 12;
-  constexpr std::size_t min_prepared_bytes_per_triangle = 128;
-  const std::size_t elements =
-      std::max<std::size_t>(1, std::min(max_input_bytes / min_bytes_per_element, memory_budget_bytes / min_prepared_bytes_per_triangle));
+  const std::size_t by_input = max_input_bytes / min_bytes_per_element;
   ReadMeshOptions options;
-  options.max_vertices = std::min(options.max_vertices, elements);
-  options.max_triangles = std::min(options.max_triangles, elements);
+  options.max_vertices = std::max<std::size_t>(1, std::min({options.max_vertices, by_input, memory_budget_bytes / kPreparedBytesPerVertex}));
+  options.max_triangles =
+      std::max<std::size_t>(1, std::min({options.max_triangles, by_input, memory_budget_bytes / kPreparedBytesPerTriangle}));
   options.max_file_bytes = max_input_bytes;
+  options.memory_budget_bytes = memory_budget_bytes;
   return options;
 }
+
+namespace {
+
+// The engine squares and multiplies coordinate differences (normals, jets to third order,
+// areas): within these bounds none of that overflows or underflows to zero. A mesh with 1e300
+// coordinates had been accepted and answered lines whose lengths were NaN.
+constexpr double kMaxCoordinate = 1e15;
+constexpr double kMinExtent = 1e-30;
+
+void check_coordinate_range(const std::string& name, const std::vector<std::array<double, 3>>& positions) {
+  std::array<double, 3> low = positions.front(), high = positions.front();
+  for (std::size_t v = 0; v < positions.size(); ++v) {
+    const auto& p = positions[v];
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(p[k])) throw MeshFormatError(name + " vertex " + std::to_string(v + 1) + " has a non-finite coordinate.");
+      if (std::abs(p[k]) > kMaxCoordinate)
+        throw MeshFormatError(name + " vertex " + std::to_string(v + 1) + " has a coordinate of magnitude " + format_number(std::abs(p[k])) +
+                              ", above the 1e15 this engine computes with; scale the mesh.");
+      low[k] = std::min(low[k], p[k]);
+      high[k] = std::max(high[k], p[k]);
+    }
+  }
+  const double extent = std::hypot(high[0] - low[0], high[1] - low[1], high[2] - low[2]);
+  if (extent > 0 && extent < kMinExtent)  // no extent at all: every triangle is degenerate, as prepare_mesh reports
+    throw MeshFormatError(name + " input spans " + format_number(extent) + " units, less than the 1e-30 this engine computes with; scale the mesh.");
+}
+
+}  // namespace
 
 RawMesh read_mesh(std::string_view bytes, MeshFormat format, const ReadMeshOptions& options) {
   const std::string name = detail::display_name(format);
@@ -169,12 +204,7 @@ RawMesh read_mesh(std::string_view bytes, MeshFormat format, const ReadMeshOptio
   if (mesh.triangles.empty()) throw MeshFormatError(name + " input contains no triangles.");
   detail::check_vertex_limit(format, mesh.positions.size(), options);
   detail::check_triangle_limit(format, mesh.triangles.size(), options);
-  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-    const auto& p = mesh.positions[v];
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-      throw MeshFormatError(name + " vertex " + std::to_string(v + 1) + " has a non-finite coordinate.");
-    }
-  }
+  check_coordinate_range(name, mesh.positions);
   const std::size_t n = mesh.positions.size();
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     for (std::uint32_t i : mesh.triangles[t]) {

@@ -102,6 +102,45 @@ TEST(PrepareMesh, StatisticsOfKnownShapes) {
   EXPECT_EQ(prepare_mesh(a)->statistics.components, 2u);
 }
 
+TEST(PrepareMesh, DropsRepeatedTrianglesWithoutCopyingVertices) {
+  // One triangle of a two-triangle square repeated 10,000 times, in both orientations: each
+  // repeat is dropped (a copy of its corners each had made 30,000 vertices).
+  RawMesh raw;
+  raw.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  raw.triangles = {{0, 1, 2}, {0, 2, 3}};
+  for (int i = 0; i < 10000; ++i) raw.triangles.push_back(i % 2 ? std::array<std::uint32_t, 3>{1, 2, 0} : std::array<std::uint32_t, 3>{2, 1, 0});
+  raw.triangles.push_back({3, 2, 0});
+  raw.source_faces = raw.triangles.size();
+  const auto mesh = prepare_mesh(raw);
+  EXPECT_EQ(mesh->statistics.faces, 2u);
+  EXPECT_EQ(mesh->statistics.repeated_faces, 10001u);
+  EXPECT_EQ(mesh->statistics.duplicated_vertices, 0u);
+  EXPECT_EQ(mesh->n_vertices(), 4u);
+  ASSERT_EQ(mesh->warnings.size(), 1u);
+  EXPECT_NE(mesh->warnings[0].find("10001 triangle(s) over the same three vertices as an earlier one were dropped (first: input triangle 2)"),
+            std::string::npos) << mesh->warnings[0];
+}
+
+TEST(PrepareMesh, RefusesWhatCannotFitItsMemoryBound) {
+  const RawMesh raw = featureline::testing::make_icosphere(1.0, 4);  // 2,562 vertices, 5,120 triangles
+  const std::size_t needed = prepared_bytes_lower_bound(raw.positions.size(), raw.triangles.size());
+  PrepareOptions options;
+  options.max_memory_bytes = needed + (needed >> 1);
+  const auto mesh = prepare_mesh(raw, options);
+  // The bound is a lower bound: the mesh really costs at least as much.
+  EXPECT_GE(mesh->memory_bytes(), needed);
+  options.max_memory_bytes = needed - 1000;
+  try {
+    prepare_mesh(raw, options);
+    FAIL() << "a mesh above its memory bound was prepared";
+  } catch (const LimitExceededError& e) {
+    EXPECT_NE(std::string(e.what()).find("MiB it may use"), std::string::npos) << e.what();
+  }
+  // Vertices alone: refused before any face is added.
+  options.max_memory_bytes = raw.positions.size() * kPreparedBytesPerVertex - 1;
+  EXPECT_THROW(prepare_mesh(raw, options), LimitExceededError);
+}
+
 TEST(PrepareMesh, ReportsDegenerateAndNonManifoldFacesAndKeepsIds) {
   RawMesh raw;
   raw.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {5, 5, 5}};

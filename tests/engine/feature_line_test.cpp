@@ -69,6 +69,28 @@ TEST(FeatureLine, NoRefineReturnsTheInitialLineOnVertices) {
   EXPECT_NEAR(result.refined_length, result.initial.length, 1e-12);
 }
 
+TEST(FeatureLine, LinesAreFiniteAndScaleWithTheMeshAtTheEdgesOfTheCoordinateRange) {
+  // 1e14 and 1e-25 times a unit ridge: inside the range read_mesh accepts (|x| <= 1e15, extent
+  // >= 1e-30), every number of the line is finite and the line is the same up to scale.
+  const auto field = make_ridge_field(31, 0.2, 1, 0.3, 0.25, 0.2);
+  FeatureLineRequest request;
+  request.keys = {nearest_vertex(field.mesh, -0.7, field.crest(-0.7)), nearest_vertex(field.mesh, 0, field.crest(0)),
+                  nearest_vertex(field.mesh, 0.7, field.crest(0.7))};
+  const auto unit = detect_feature_line(*prepare_mesh(field.mesh), request);
+  for (const double s : {1e14, 1e-25}) {
+    SCOPED_TRACE(s);
+    const auto line = detect_feature_line(*prepare_mesh(scaled(field.mesh, s)), request);
+    ASSERT_TRUE(std::isfinite(line.refined_length));
+    EXPECT_NEAR(line.refined_length / s, unit.refined_length, 1e-6 * unit.refined_length);
+    EXPECT_NEAR(line.initial.length / s, unit.initial.length, 1e-9 * unit.initial.length);
+    for (const auto& piece : line.piece_reports) {
+      EXPECT_TRUE(std::isfinite(piece.initial_strength));
+      EXPECT_TRUE(std::isfinite(piece.refined_strength));
+    }
+    for (const auto& p : line.refined) EXPECT_TRUE(p.position.allFinite());
+  }
+}
+
 TEST(FeatureLine, ConcurrentRequestsOnOneMeshAgree) {
   const auto field = make_ridge_field(61, 0.2, 7, 0.3, 0.25, 0.3);
   const std::shared_ptr<const PreparedMesh> mesh = prepare_mesh(field.mesh);

@@ -25,8 +25,9 @@ if [ "$corpus" != json ]; then
   find "$shared/data/meshes" -maxdepth 1 -type f -iname "*.$corpus" -size -64k -exec cp {} "$dir/" \;
 fi
 echo "# $(basename "$fuzzer"): $(ls "$dir" | wc -l) seeds, ${RUNS:-3000} runs, at most $seconds s"
-# -seed fixes the mutations; -timeout flags a hang; -rss_limit_mb flags an input that takes memory.
-"$fuzzer" -seed=1 -runs="${RUNS:-3000}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+# -seed fixes the mutations; -timeout flags a hang; -rss_limit_mb flags an input that takes
+# memory, -malloc_limit_mb one allocation far past the harness's 4 MiB account.
+"$fuzzer" -seed=1 -runs="${RUNS:-3000}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=64 \
   -max_len=65536 -print_final_stats=1 -artifact_prefix="$artifacts/$(basename "$fuzzer")-" "$dir" 2>"$work/log" || {
   status=$?
   tail -n 60 "$work/log"

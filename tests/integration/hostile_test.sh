@@ -58,7 +58,7 @@ http "$T/amp.json" --data-binary @"$amplified" -H 'Content-Type: model/gltf-bina
 took=$(elapsed_since "$t0")
 expect "22 KB GLB expanding to 32 M triangles (default limits)" 413 payload_too_large POST /v1/meshes "$T/amp.json"
 check_eq "its message says the scene expands past the default limit" \
-  "$(jq -r .error.message "$T/amp.json" | grep -o 'expands to more than 8388608 triangles')" "expands to more than 8388608 triangles"
+  "$(jq -r .error.message "$T/amp.json" | grep -o 'expands to more than 7895160 triangles')" "expands to more than 7895160 triangles"
 check "it is refused in under 2 s, before expanding (took $took s)" less_than "$took" $((2 * FACTOR))
 http "$T/amp2.json" --data-binary @"$amplified" -H 'Content-Type: model/gltf-binary' "$H/v1/meshes"
 expect "the same GLB with a 1 MiB upload limit" 413 payload_too_large POST /v1/meshes "$T/amp2.json"
@@ -72,7 +72,7 @@ check_eq "its 4 translated instances of a 16-vertex grid give 64 vertices" "$(jq
 if [ -x "${FEATURELINE:-}" ]; then
   out=$("$FEATURELINE" info "$amplified" 2>&1); rc=$?
   check_eq "featureline info on the amplified GLB exits 1" "$rc" 1
-  check_eq "with the expansion message" "$(printf %s "$out" | grep -o 'expands to more than 8388608 triangles')" "expands to more than 8388608 triangles"
+  check_eq "with the expansion message" "$(printf %s "$out" | grep -o 'expands to more than 7895160 triangles')" "expands to more than 7895160 triangles"
   out=$("$FEATURELINE" info "$amplified" --max-triangles 40000000 --max-vertices 1000 2>&1)
   check_eq "featureline --max-vertices 1000 refuses it on vertices" "$(printf %s "$out" | grep -o 'configured limit is 1000 (--max-vertices)')" "configured limit is 1000 (--max-vertices)"
 else

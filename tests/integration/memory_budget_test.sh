@@ -74,6 +74,48 @@ http "$TMP/deep.out" -X POST -H 'Content-Type: application/json' --data-binary @
 check_eq "100,000 levels of nesting: 413" "$STATUS" 413
 check "... saying how deep" grep -q 'nests 100001 levels deep; at most 64' "$TMP/deep.out"
 
+# Files that expand: each answered within a bound, named by what is too large, within the
+# same peak. The budget is 64 MiB: at most 493,447 triangles (136 B each prepared).
+MESHES="$ROOT/tests/support/hostile_meshes.py"
+UPLOAD_MAX=$((20 * FACTOR))
+upload() {  # upload NAME FILE: STATUS, the answer in $TMP/NAME.json and the seconds it took
+  local start; start=$(now_s)
+  http "$TMP/$1.json" --max-time "$UPLOAD_MAX" -X POST -H 'Content-Type: application/octet-stream' --data-binary @"$2" "$B/v1/meshes"
+  SECONDS_TAKEN=$(elapsed_since "$start")
+  echo "#    $1: $STATUS in $SECONDS_TAKEN s ($(stat -c %s "$2") bytes)"
+}
+python3 "$MESHES" repeated-ply 400000 "$TMP/repeated.ply"
+upload "one triangle 400,000 times (PLY)" "$TMP/repeated.ply"
+check_eq "... 201: the repeats are dropped, not given vertex copies" "$STATUS" 201
+check_eq "... one face kept, 399,999 repeats reported" "$(jq -c '[.faces, .repeated_faces, .vertices]' "$TMP/one triangle 400,000 times (PLY).json")" "[1,399999,3]"
+python3 "$MESHES" repeated-ply 2000000 "$TMP/repeated2m.ply"
+upload "one triangle 2,000,000 times (PLY)" "$TMP/repeated2m.ply"
+check_eq "... 413" "$STATUS" 413
+check "... naming the triangle limit" grep -q 'more than 493447 triangles' "$TMP/one triangle 2,000,000 times (PLY).json"
+python3 "$MESHES" repeated-glb 40 "$TMP/repeated40.glb"
+upload "40 primitives sharing one accessor of 10,000 repeats (GLB)" "$TMP/repeated40.glb"
+check_eq "... 201, one face kept" "$STATUS/$(jq -c '[.faces, .repeated_faces]' "$TMP/40 primitives sharing one accessor of 10,000 repeats (GLB).json")" "201/[1,399999]"
+python3 "$MESHES" repeated-glb 800 "$TMP/repeated800.glb"
+upload "800 primitives sharing one accessor (GLB, 8 M triangles declared)" "$TMP/repeated800.glb"
+check_eq "... 413 before expanding" "$STATUS/$(error_code "$TMP/800 primitives sharing one accessor (GLB, 8 M triangles declared).json")" "413/payload_too_large"
+check "... within a second or so" less_than "$SECONDS_TAKEN" "$((2 * FACTOR))"
+python3 "$MESHES" draco 33554432 100 "$TMP/huge.drc"
+upload "Draco header declaring 33.5 M faces" "$TMP/huge.drc"
+check_eq "... 413 before decoding" "$STATUS" 413
+check "... naming the triangle limit" grep -q 'Draco mesh has more than 493447 triangles' "$TMP/Draco header declaring 33.5 M faces.json"
+python3 "$MESHES" draco 400000 200000 "$TMP/budget.drc"
+upload "Draco header declaring 400,000 faces and 200,000 points" "$TMP/budget.drc"
+check_eq "... 413: they could never be kept in 64 MiB" "$STATUS" 413
+check "... saying what they would need" grep -q 'declares 400000 faces and 200000 vertices, which need more than 73 MiB prepared, more than the 64 MiB allowed' \
+  "$TMP/Draco header declaring 400,000 faces and 200,000 points.json"
+python3 "$MESHES" huge-off "$TMP/huge.off"
+upload "a 1e300 coordinate" "$TMP/huge.off"
+check_eq "... 400 malformed_mesh" "$STATUS/$(error_code "$TMP/a 1e300 coordinate.json")" "400/malformed_mesh"
+check "... naming the vertex and the bound" grep -q 'vertex 1 has a coordinate of magnitude 1e+300, above the 1e15' "$TMP/a 1e300 coordinate.json"
+peak=$(peak_kb "$PID")
+echo "#    after the expanding files: peak resident memory $((peak / 1024)) MB (limit $((PEAK_LIMIT_KB / 1024)) MB)"
+check "expanding files: peak resident memory within 3 x --cache-mb + 64 MB" [ "$peak" -lt "$PEAK_LIMIT_KB" ]
+
 http "$TMP/ok.json" -X POST -H 'Content-Type: application/json' -d "$LINE" "$B/v1/meshes/$id/feature-lines"
 check_eq "afterwards a line answers 200" "$STATUS" 200
 finish

@@ -21,10 +21,12 @@ std::string corpus_file(const std::string& name) {
 }
 
 TEST(ReadLimits, FollowTheUploadLimitAndTheMemoryBudget) {
-  // 256 MiB / 12 bytes = 22,369,621; 1 GiB / 128 bytes = 8,388,608: the smaller wins.
+  // 256 MiB / 12 bytes = 22,369,621; 1 GiB / 136 bytes per prepared triangle = 7,895,160 and
+  // / 112 bytes per prepared vertex = 9,586,980: the smaller wins.
   const ReadMeshOptions server_default = read_limits_for(std::size_t(256) << 20, std::size_t(1) << 30);
-  EXPECT_EQ(server_default.max_triangles, 8388608u);
-  EXPECT_EQ(server_default.max_vertices, 8388608u);
+  EXPECT_EQ(server_default.max_triangles, 7895160u);
+  EXPECT_EQ(server_default.max_vertices, 9586980u);
+  EXPECT_EQ(server_default.memory_budget_bytes, std::size_t(1) << 30);
   EXPECT_EQ(server_default.max_file_bytes, std::size_t(256) << 20);
   const ReadMeshOptions small_uploads = read_limits_for(std::size_t(1) << 20, std::size_t(1) << 30);
   EXPECT_EQ(small_uploads.max_triangles, 87381u);
