@@ -6,6 +6,7 @@
 #include <new>
 
 #include "engine/errors.h"
+#include "server/session_cache.h"
 #include "server/upload_store.h"
 
 namespace featureline::server {
@@ -45,6 +46,8 @@ ErrorReply error_reply(std::exception_ptr error) {
     r = {503, "storage_full", e.what(), {{"Retry-After", "60"}}};
   } catch (const StoreUnavailableError& e) {
     r = {503, "storage_unavailable", e.what(), {{"Retry-After", "5"}}};
+  } catch (const CacheTooSmallError& e) {
+    r = {503, "cache_too_small", e.what(), {{"Retry-After", "60"}}};
   } catch (const UnsupportedFormatError& e) {
     r = {415, "unsupported_format", e.what(), {}};
   } catch (const LimitExceededError& e) {

@@ -5,6 +5,8 @@
 #include <cerrno>
 #include <stdexcept>
 
+#include "engine/errors.h"
+
 namespace featureline::server {
 
 std::string random_session_id() {
@@ -178,6 +180,10 @@ DurableSessions::Found DurableSessions::find(const std::string& id) {
     found.why = gone_from(miss);
     return found;
   }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (auto it = too_large_.find(id); it != too_large_.end()) throw CacheTooSmallError(it->second);
+  }
   return rebuild_once(id);
 }
 
@@ -217,17 +223,31 @@ DurableSessions::Found DurableSessions::load_from_store(const std::string& id) {
     found.why = why_gone(id, lookup.why);
     return found;
   }
-  MeshSession session = rebuild_(std::make_shared<const StoredUpload>(std::move(*lookup.upload)));
+  MeshSession session;
+  try {
+    session = rebuild_(std::make_shared<const StoredUpload>(std::move(*lookup.upload)));
+  } catch (const LimitExceededError& e) {
+    throw too_large(id, std::string(": ") + e.what());
+  }
   session.id = id;
   const std::size_t bytes = session.bytes;
   auto cached = cache_.insert(std::move(session));
-  if (!cached)
-    throw std::runtime_error("mesh " + id + " needs " + std::to_string(bytes >> 20) + " MiB, more than the whole session cache");
+  if (!cached) throw too_large(id, " needs " + std::to_string(bytes >> 20) + " MiB prepared");
   ++rebuilds_;
   found.session = *cached;
   found.rebuilt = true;
   still_stored(id);  // restarts the store's idle clock
   return found;
+}
+
+// Remembers that `id` cannot fit (until it is deleted), so later requests are refused at once.
+CacheTooSmallError DurableSessions::too_large(const std::string& id, const std::string& why) {
+  CacheTooSmallError error("mesh " + id + " is stored but cannot be prepared within this server's memory" + why +
+                           "; a server with a larger --cache-mb can serve it");
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (too_large_.size() > 10000) too_large_.clear();  // bounded: forgetting only costs one more attempt
+  too_large_[id] = error.what();
+  return error;
 }
 
 // Restarts the store's idle clock when due (every use for a shared store); false only when
@@ -269,11 +289,15 @@ std::optional<std::shared_ptr<const MeshSession>> DurableSessions::create(MeshSe
 }
 
 bool DurableSessions::erase(const std::string& id, Gone* why) {
-  const bool cached = cache_.erase(id);
+  // The store first: when it cannot delete (unreachable, read-only) the request fails and the
+  // session stays whole; dropping the cached copy first had answered 503 while the mesh came
+  // back from the store later.
   const bool stored = store_ && store_->erase(id);
+  const bool cached = cache_.erase(id);
   {
     std::lock_guard<std::mutex> lock(mutex_);
     touched_.erase(id);
+    too_large_.erase(id);
   }
   if (cached || stored) return true;
   if (why != nullptr) *why = why_gone(id, store_ ? store_->get(id).why : StoreMiss::unknown);

@@ -100,6 +100,13 @@ class SessionCache {
 /// An upload is stored before it is cached; a cache miss asks the store and rebuilds the prepared
 /// mesh from the stored bytes (once, however many requests wait for it), so eviction, a restart
 /// or another replica costs a rebuild, not the session. Without a store it is the cache alone.
+/// A stored upload whose prepared mesh cannot fit this server's cache (the server restarted with
+/// a smaller --cache-mb, or another replica with a larger one took the upload).
+class CacheTooSmallError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 class DurableSessions {
  public:
   /// Prepares a stored upload again (read + prepare); the server runs it on its engine pool.
@@ -123,7 +130,8 @@ class DurableSessions {
 
   DurableSessions(SessionCache& cache, std::unique_ptr<UploadStore> store, Rebuild rebuild, Options options);
 
-  /// The session: from the cache, else rebuilt from the store. 	hrow StoreUnavailableError, and
+  /// The session: from the cache, else rebuilt from the store. \throw StoreUnavailableError,
+  /// CacheTooSmallError (remembered: the upload is not prepared again for every request), and
   /// what Rebuild throws (every waiter on the same rebuild gets the same exception)
   Found find(const std::string& id);
 
@@ -132,7 +140,8 @@ class DurableSessions {
   /// 	hrow StoreFullError, StoreUnavailableError (nothing is kept then)
   std::optional<std::shared_ptr<const MeshSession>> create(MeshSession session, const StoredUpload& upload);
 
-  /// Removes the session from the cache and the store; false (and why) when neither had it.
+  /// Removes the session from the store, then the cache; false (and why) when neither had it.
+  /// \throw StoreUnavailableError (the session is kept whole, cached copy included)
   bool erase(const std::string& id, Gone* why);
 
   /// Expires idle sessions in the cache and idle uploads in the store; false when the store
@@ -148,6 +157,7 @@ class DurableSessions {
   Found load_from_store(const std::string& id);
   Gone why_gone(const std::string& id, StoreMiss store_miss);
   bool still_stored(const std::string& id);
+  CacheTooSmallError too_large(const std::string& id, const std::string& why);
 
   SessionCache& cache_;
   std::unique_ptr<UploadStore> store_;
@@ -157,6 +167,7 @@ class DurableSessions {
   std::mutex mutex_;  // guards flights_ and touched_
   std::unordered_map<std::string, std::shared_future<Found>> flights_;  // rebuilds in progress
   std::unordered_map<std::string, SessionCache::Clock::time_point> touched_;
+  std::unordered_map<std::string, std::string> too_large_;  // ids whose rebuild cannot fit: the message
 };
 
 }  // namespace featureline::server

@@ -271,10 +271,17 @@ class GuardedServer::Connection : public httplib::Stream {
 
   enum class Wait { ready, closed };
 
-  /// Waits up to `seconds` for the first byte of a next request.
-  Wait wait_for_request(double seconds) {
+  /// Waits up to `seconds` for the first byte of a request; once `seconds_if_others_wait` have
+  /// passed, it gives up as soon as `others_wait` says that other connections wait for a worker.
+  Wait wait_for_request(double seconds, double seconds_if_others_wait, const std::function<bool()>& others_wait) {
     if (pos_ < buffer_.size()) return Wait::ready;
-    return wait_readable(after_seconds(seconds)) ? Wait::ready : Wait::closed;
+    const auto deadline = after_seconds(seconds);
+    if (wait_readable(after_seconds(std::min(seconds, seconds_if_others_wait)))) return Wait::ready;
+    while (!stopping_ && Clock::now() < deadline) {
+      if (others_wait()) return Wait::closed;
+      if (wait_readable(std::min(deadline, Clock::now() + 2 * kWaitSlice))) return Wait::ready;
+    }
+    return Wait::closed;
   }
 
   struct Head {
@@ -289,7 +296,15 @@ class GuardedServer::Connection : public httplib::Stream {
     const auto deadline = after_seconds(limits_.head_timeout_s);
     std::size_t scanned = 0;
     for (;;) {
-      const std::size_t end = buffer_.find("\r\n\r\n", scanned > 3 ? scanned - 3 : 0);
+      const std::size_t from = scanned > 3 ? scanned - 3 : 0;
+      const std::size_t end = buffer_.find("\r\n\r\n", from);
+      // A head whose lines end in a bare LF would never end for httplib, which skips such lines:
+      // refused at once instead of waiting for the head deadline.
+      const std::size_t bare = buffer_.find('\n', scanned);  // only the bytes new since the last look
+      const std::size_t limit = end == std::string::npos ? buffer_.size() : end;
+      for (std::size_t lf = bare; lf != std::string::npos && lf < limit; lf = buffer_.find('\n', lf + 1))
+        if (lf == 0 || buffer_[lf - 1] != '\r')
+          return {{}, reply(400, "invalid_request", "the request's lines must end with CR LF, not a bare LF")};
       if (end != std::string::npos) {
         pos_ = end + 4;
         return {buffer_.substr(0, pos_), std::nullopt};
@@ -491,18 +506,19 @@ bool GuardedServer::answer_refusal(Connection& connection, const ErrorReply& ref
   return true;  // the rest of the request is unread: linger on close
 }
 
-// How long an idle keep-alive connection keeps its worker while other connections wait.
+// How long a connection without a request keeps its worker while other connections wait.
 constexpr double kIdleWhenOthersWaitS = 1.0;
 
 bool GuardedServer::serve(Connection& connection) {
   for (std::size_t served = 0; served < limits_.keep_alive_max_requests; ++served) {
-    // An idle keep-alive connection gives its worker up sooner when other connections wait for
-    // one, but never at once: a client's next request may be on its way (closing then loses it,
-    // and a POST cannot be retried). The answer before already said Connection: close if others
-    // were waiting then.
-    const double idle = served > 0 && queue_->has_waiting() ? std::min(limits_.idle_timeout_s, kIdleWhenOthersWaitS)
-                                                            : limits_.idle_timeout_s;
-    if (connection.wait_for_request(idle) != Connection::Wait::ready) return false;
+    // A connection without a request (new, or idle between keep-alive requests) gives its
+    // worker up sooner when other connections wait for one, but never at once: a client's
+    // request may be on its way (closing then loses it, and a POST cannot be retried). A new
+    // connection that sent nothing had kept its worker 5 s, so a few dozen connects a second
+    // held every worker. The answer before already said Connection: close if others were waiting.
+    if (connection.wait_for_request(limits_.idle_timeout_s, kIdleWhenOthersWaitS, [this] { return queue_->has_waiting(); }) !=
+        Connection::Wait::ready)
+      return false;
     Connection::Head head = connection.read_head();
     if (head.refusal) return answer_refusal(connection, *head.refusal);
     if (head.bytes.empty()) return false;

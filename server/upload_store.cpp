@@ -263,7 +263,12 @@ class DirectoryStore final : public UploadStore {
 
   bool remove_upload(const std::string& id) {
     struct stat st{};
-    if (stat(upload_path(id).c_str(), &st) != 0) return false;
+    if (stat(upload_path(id).c_str(), &st) != 0) {
+      // Not there is "not stored" only while the folder itself is there (as in get).
+      if (errno != ENOENT || access((root_ + "/uploads").c_str(), F_OK) != 0)
+        throw StoreUnavailableError("the upload store failed: " + errno_text("stat", upload_path(id)));
+      return false;
+    }
     if (unlink(upload_path(id).c_str()) != 0) {
       if (errno == ENOENT) return false;  // removed meanwhile by another request
       throw StoreUnavailableError("the upload store failed: " + errno_text("unlink", upload_path(id)));

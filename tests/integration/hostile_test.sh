@@ -128,6 +128,9 @@ raw_error "200 header fields" "$T/many.txt" 431 headers_too_large
 long=$(head -c 100000 /dev/zero | tr '\0' a)
 raw_send "$HP" "$T/long.txt" 0 $'GET /healthz HTTP/1.1\r\nHost: t\r\nX-Long: '"$long"$'\r\n\r\n' ""
 raw_error "a 100 KB header line" "$T/long.txt" 431 headers_too_large
+raw_send "$HP" "$T/lf.txt" 0 $'GET /healthz HTTP/1.1\nHost: t\n\n' ""
+raw_error "a request whose lines end in a bare LF" "$T/lf.txt" 400 invalid_request
+check "... says why" grep -q 'must end with CR LF, not a bare LF' "$T/lf.txt.json"
 
 # ---- 5. slow and idle clients, the upload buffer ----------------------------------------------------------------
 echo "# 5. slowloris, connection limit, backlog"
@@ -191,6 +194,21 @@ kill "$idle" 2>/dev/null; wait "$idle" 2>/dev/null
 sleep 0.3
 http "$T/after.json" "$H/healthz"
 check_eq "after the silent connections close, /healthz answers 200" "$STATUS" 200
+
+# 4 new connections that send nothing hold the 4 workers; a request behind them is served once
+# they give their workers up (after 1 s when others wait; the idle timeout alone is 5 s).
+rm -f "$T/idle.ready"
+( exec 3<>"/dev/tcp/127.0.0.1/$HP" 4<>"/dev/tcp/127.0.0.1/$HP" 5<>"/dev/tcp/127.0.0.1/$HP" 6<>"/dev/tcp/127.0.0.1/$HP" &&
+  touch "$T/idle.ready" && sleep $((8 * FACTOR)) ) 2>/dev/null &
+idle=$!; BG_PIDS+=($idle)
+wait_for "$T/idle.ready"
+sleep 0.3
+t0=$(now_s)
+http "$T/behind.json" --max-time $((10 * FACTOR)) "$H/healthz"
+took=$(elapsed_since "$t0")
+check_eq "4 silent new connections on 4 workers: a request behind them is answered" "$STATUS" 200
+check "... once they yield their workers, well before the 5 s idle timeout (took $took s)" less_than "$took" "$((1 + 2 * FACTOR))"
+kill "$idle" 2>/dev/null; wait "$idle" 2>/dev/null
 
 if command -v ss >/dev/null; then
   backlog=$(ss -Hltn "sport = :$HP" | awk '{print $3}' | head -n 1)

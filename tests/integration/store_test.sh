@@ -89,6 +89,20 @@ check_eq "with an identical line" "$LINE" "$FIRST_LINE"
 check "it was rebuilt from the store" test "$(metric small featureline_store_rebuilds_total)" -ge 1
 stop_server small
 
+# ---- restarted with a cache too small for a stored mesh: 503 cache_too_small, remembered ------------
+start_server tiny --data-dir "$T/data2" --cache-mb 2 --quiet || exit 1
+http "$T/tiny1.json" "${SRV_BASE[tiny]}/v1/meshes/$FIRST"
+expect "a stored mesh a 2 MiB cache cannot hold" 503 cache_too_small GET "/v1/meshes/$FIRST" "$T/tiny1.json"
+check "... says so and what would serve it" grep -q "cannot be prepared within this server's memory.*larger --cache-mb" "$T/tiny1.json"
+check_eq "... with Retry-After: 60" "$(header "$T/tiny1.json" Retry-After)" 60
+line tiny "$FIRST" '[10, 200, 400]'
+check_eq "a line on it: the same 503, remembered (not read again)" "$STATUS/$(error_code "$T/line.json")" "503/cache_too_small"
+http "$T/tinydel.json" -X DELETE "${SRV_BASE[tiny]}/v1/meshes/$FIRST"
+check_eq "it can still be deleted: 204" "$STATUS" 204
+http "$T/tiny2.json" "${SRV_BASE[tiny]}/v1/meshes/$FIRST"
+check "then it is gone: 404 deleted" grep -q "was deleted" "$T/tiny2.json"
+stop_server tiny
+
 # ---- a full store and an unreachable Redis: 503, nothing kept -------------------------------------------
 start_server full --data-dir "$T/data3" --store-max-mb 2 --quiet || exit 1
 upload full samples/ridge_field.off

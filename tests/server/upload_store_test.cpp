@@ -16,6 +16,7 @@
 #include <fstream>
 #include <thread>
 
+#include "engine/errors.h"
 #include "engine/prepared_mesh.h"
 #include "server/session_cache.h"
 #include "server/upload_store.h"
@@ -449,6 +450,50 @@ TEST(DurableSessions, AStoreThatRefusesLeavesNoSession) {
   DurableSessions sessions(cache, open_directory_store(dir.path, tiny), rebuilds.fn(), {});
   EXPECT_THROW(sessions.create(fresh_session(10), upload_of(std::string(100, 'x'))), StoreFullError);
   EXPECT_EQ(cache.stats().entries, 0u);
+}
+
+TEST(DurableSessions, ADeleteTheStoreCannotDoKeepsTheSessionWhole) {
+  TempFolder dir;
+  Rebuilds rebuilds;
+  SessionCache cache({1 << 20, std::chrono::seconds(60)});
+  DurableSessions sessions(cache, open_directory_store(dir.path / "store", {}), rebuilds.fn(), {});
+  const auto id = (*sessions.create(fresh_session(10), upload_of("x")))->id;
+  fs::remove_all(dir.path / "store");  // the store fails: the DELETE must fail whole
+  EXPECT_THROW(sessions.erase(id, nullptr), StoreUnavailableError);
+  EXPECT_EQ(cache.stats().entries, 1u);
+  EXPECT_NE(sessions.find(id).session, nullptr);
+}
+
+TEST(DurableSessions, AStoredMeshThatCannotFitIsRefusedOnceAndRemembered) {
+  TempFolder dir;
+  std::string id;
+  {
+    SessionCache cache({1 << 20, std::chrono::seconds(60)});
+    Rebuilds rebuilds;
+    DurableSessions sessions(cache, open_directory_store(dir.path, {}), rebuilds.fn(), {});
+    id = (*sessions.create(fresh_session(100), upload_of(std::string(100, 'm'))))->id;
+  }
+  // Restarted with less memory: preparing the upload again exceeds the budget.
+  std::atomic<int> attempts{0};
+  SessionCache cache({1 << 20, std::chrono::seconds(60)});
+  DurableSessions sessions(cache, open_directory_store(dir.path, {}),
+                           [&](std::shared_ptr<const StoredUpload>) -> MeshSession {
+                             ++attempts;
+                             throw LimitExceededError("the prepared mesh needs more than 5 MiB");
+                           },
+                           {});
+  for (int i = 0; i < 3; ++i) {
+    try {
+      sessions.find(id);
+      ADD_FAILURE() << "a mesh that cannot fit was served";
+    } catch (const CacheTooSmallError& e) {
+      EXPECT_NE(std::string(e.what()).find("cannot be prepared within this server's memory: the prepared mesh needs more than 5 MiB"),
+                std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(attempts, 1);  // remembered: the upload is not read again per request
+  EXPECT_TRUE(sessions.erase(id, nullptr));
+  EXPECT_EQ(sessions.find(id).why, DurableSessions::Gone::deleted);
 }
 
 }  // namespace
