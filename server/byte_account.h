@@ -18,16 +18,22 @@ class ByteAccount {
     do {
       if (bytes > capacity_ || used > capacity_ - bytes) return false;
     } while (!used_.compare_exchange_weak(used, used + bytes));
+    std::size_t peak = peak_.load();
+    while (used + bytes > peak && !peak_.compare_exchange_weak(peak, used + bytes)) {
+    }
     return true;
   }
   void give_back(std::size_t bytes) { used_ -= bytes; }
 
   std::size_t used() const { return used_.load(); }
+  /// The most used at once since the last call (or since the start); starts the next period.
+  std::size_t take_peak() { return peak_.exchange(used_.load()); }
   std::size_t capacity() const { return capacity_; }
 
  private:
   const std::size_t capacity_;
   std::atomic<std::size_t> used_{0};
+  std::atomic<std::size_t> peak_{0};
 };
 
 /// What one request holds of an account; given back when it goes.

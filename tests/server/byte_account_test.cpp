@@ -24,6 +24,21 @@ TEST(ByteAccount, HoldsGrowShrinkAndAreGivenBack) {
   EXPECT_EQ(account.used(), 0u);
 }
 
+TEST(ByteAccount, ThePeakIsTheMostHeldSinceItWasLastTaken) {
+  ByteAccount account(100);
+  {
+    ByteHold a(account), b(account);
+    ASSERT_TRUE(a.hold(30));
+    ASSERT_TRUE(b.hold(50));
+    EXPECT_FALSE(b.hold(80));  // refused: not a peak
+    ASSERT_TRUE(b.hold(5));
+    EXPECT_EQ(account.take_peak(), 80u);
+    EXPECT_EQ(account.take_peak(), 35u);  // a new period starts at what is held now
+  }
+  EXPECT_EQ(account.take_peak(), 35u);  // given back since, but held at the period's start
+  EXPECT_EQ(account.take_peak(), 0u);
+}
+
 TEST(ByteAccount, ConcurrentHoldsNeverExceedTheCapacity) {
   ByteAccount account(1000);
   std::atomic<bool> exceeded{false};
