@@ -129,6 +129,23 @@ write('ply', 'strip_uchar_restart.ply', plyHeader('ascii', 'tristrips', 'vertex_
   tetra.v.map((p) => p.join(' ')).join('\n') + '\n9 0 1 2 3 255 3 2 1 0\n');
 write('off', 'fine_coordinates.off', 'OFF # counts follow\n4 4 0\n' + tetra.v.map((p, i) => p.map((c) => (i === 1 ? c + 1e-12 : c)).join(' ')).join('\n') +
   '\n' + tetra.f.map((f) => '3 ' + f.join(' ')).join('\n') + '\n');
+// The edges of the coordinate range the readers accept (|x| <= 1e15, at least 1e-30 across):
+// 1e300 had given lines whose lengths were NaN, and the snake converted NaN to int.
+write('off', 'regression_huge_coordinates.off', 'OFF\n4 4 0\n' + tetra.v.map((p) => p.map((c) => c * 1e300).join(' ')).join('\n') +
+  '\n' + tetra.f.map((f) => '3 ' + f.join(' ')).join('\n') + '\n');
+write('off', 'range_edges.off', 'OFF\n4 4 0\n' + tetra.v.map((p, i) => p.map((c) => (i === 1 ? c * 1e15 : c * 1e-20)).join(' ')).join('\n') +
+  '\n' + tetra.f.map((f) => '3 ' + f.join(' ')).join('\n') + '\n');
+{
+  // Repeated triangles: dropped, never given vertex copies.
+  const body = Buffer.alloc(12 * 4 + 13 * 200);
+  tetra.v.forEach((p, i) => p.forEach((c, k) => body.writeFloatLE(c, 12 * i + 4 * k)));
+  for (let f = 0; f < 200; ++f) {
+    const at = 48 + 13 * f;
+    body.writeUInt8(3, at);
+    [0, 1, 2].forEach((v, k) => body.writeInt32LE(f % 2 ? 2 - v : v, at + 1 + 4 * k));
+  }
+  write('ply', 'regression_repeated_faces.ply', Buffer.concat([Buffer.from(plyHeader('binary_little_endian').replace('element face 4', 'element face 200')), body]));
+}
 const facets = tetra.f.map((f) => f.map((i) => tetra.v[i]));
 write('stl', 'tetra_ascii.stl', 'solid tetra\n' + facets.map((t) =>
   ' facet normal 0 0 0\n  outer loop\n' + t.map((p) => `   vertex ${p.join(' ')}\n`).join('') + '  endloop\n endfacet\n').join('') + 'endsolid tetra\n');

@@ -210,6 +210,16 @@ check_eq "4 silent new connections on 4 workers: a request behind them is answer
 check "... once they yield their workers, well before the 5 s idle timeout (took $took s)" less_than "$took" "$((1 + 2 * FACTOR))"
 kill "$idle" 2>/dev/null; wait "$idle" 2>/dev/null
 
+# 6 keep-alive clients on 4 workers: 2 always wait for one. Answers say Connection: close while
+# others wait; no connection is ever closed with a request read and unanswered.
+http "$T/ka_up.json" --data-binary @samples/ridge_field.off -H 'Content-Type: model/x-off' "$H/v1/meshes"
+ka_id=$(jq -r '.mesh_id // empty' "$T/ka_up.json")
+ka=$(timeout $((150 * FACTOR)) python3 "$HERE/keepalive_clients.py" "$HP" 6 40 "/v1/meshes/$ka_id/feature-lines" '{"keys": [701, 963, 1184]}')
+ka_rc=$?
+echo "#    keep-alive clients: $ka"
+check_eq "6 keep-alive clients x 40 lines on 4 workers: none lost, every answer 200 or 503 ($ka)" "$ka_rc" 0
+check "... most answered" test "$(echo "$ka" | awk '{print $2}')" -ge 200
+
 if command -v ss >/dev/null; then
   backlog=$(ss -Hltn "sport = :$HP" | awk '{print $3}' | head -n 1)
   check_eq "the listen backlog is 1024 (httplib: 5)" "$backlog" 1024
