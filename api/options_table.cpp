@@ -174,6 +174,16 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "(local edge lengths) stays", "", &O::crease_fit, &CreaseFitOptions::max_shift),
       option<O>("crease_fit.min_crease_share", {0, 1}, "Noisy meshes: a piece with at least this share of crease "
                 "edges is fitted as a crease run", "", &O::crease_fit, &CreaseFitOptions::min_crease_share),
+      option<O>("crest.enabled", {}, "Place the snake's line on the crest of the feature field across it, located "
+                "inside triangles (false: the snake's line as it settles, the paper's)", "--no-crest", &O::crest, &CrestOptions::enabled),
+      option<O>("crest.radius", within(CrestOptions::radius_range), "Crest localisation: smallest fit radius (strip edge "
+                "lengths); the fit grows to the crest's half width", "", &O::crest, &CrestOptions::radius),
+      option<O>("crest.max_radius", within(CrestOptions::radius_range), "Crest localisation: largest fit radius (strip edge "
+                "lengths; also within the strip's rings)", "", &O::crest, &CrestOptions::max_radius),
+      option<O>("crest.max_shift", within(CrestOptions::max_shift_range), "Crest localisation: largest move of a point "
+                "across the line (strip edge lengths)", "", &O::crest, &CrestOptions::max_shift),
+      option<O>("crest.smoothing_passes", within(CrestOptions::smoothing_passes_range), "Crest localisation: (1, 2, 1)/4 "
+                "passes over the moves along the line", "", &O::crest, &CrestOptions::smoothing_passes),
       option<O>("keep_initial_below", {0, 1}, "A refined piece weaker on the feature than this share of its initial "
                 "line keeps the initial line (0: always the snake's)", "", &O::keep_initial_below),
       option<O>("snake.alpha", within(S::alpha_range, kEngineEnd, 1000), "Elasticity: resistance to stretching (Eq. 12)", "--alpha", &O::snake, &S::alpha),

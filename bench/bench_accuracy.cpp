@@ -100,6 +100,7 @@ std::vector<Variant> all_variants() {
       }),
       variant("jet, fixed radius 6", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.radius = 6; }),
       variant("jet, fixed radius 3", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.radius = 3; }),
+      variant("no crest localisation (the snake's line)", [](PrepareOptions&, FeatureLineOptions& o) { o.crest.enabled = false; }),
   };
 }
 

@@ -144,6 +144,20 @@ bool split_where_folded(const LineRun& run, const Piece& piece, const FlatStrip&
   return true;
 }
 
+// Stage 3b on the snake's line, kept only where it is not weaker on the feature than the snake's
+// own (the never-worse guard, applied to this step too).
+void localize_on_crest(const LineRun& run, const FeatureStrip& strip, const FlatStrip& flat, const SnakeResult& snake,
+                       PieceWork& work) {
+  if (!run.options.crest.enabled) return;
+  const CrestResult crest = localize_crest(run.pm, strip, flat, snake.points, run.snake.feature_sign, run.options.crest);
+  if (crest.moved == 0) return;
+  std::vector<SurfacePoint> points = map_to_surface(run.pm, strip, crest.points);
+  const double strength = mean_feature_strength(run.pm, points, run.snake.feature_sign, run.snake.curvature_cap);
+  if (strength < work.report.refined_strength * (1 - 1e-3)) return;
+  work.points = std::move(points);
+  work.report.refined_strength = strength;
+}
+
 // Stages 3-4 on one piece's strip, never worse than the initial line.
 void snake_on_strip(const LineRun& run, const FeatureStrip& strip, const FlatStrip& flat, PieceWork& work,
                     FeatureLineResult& result) {
@@ -154,6 +168,7 @@ void snake_on_strip(const LineRun& run, const FeatureStrip& strip, const FlatStr
     work.report.iterations = snake.iterations;
     work.report.iteration_cap = !snake.converged && snake.iterations >= run.snake.max_iterations;
     work.report.refined_strength = mean_feature_strength(run.pm, work.points, run.snake.feature_sign, run.snake.curvature_cap);
+    localize_on_crest(run, strip, flat, snake, work);
     if (work.report.refined_strength < run.options.keep_initial_below * work.report.initial_strength) {
       // Never worse: the snake left the feature (cut a corner, was drawn to another
       // feature); the initial line is the better answer for this piece.
@@ -229,6 +244,7 @@ void check_feature_line_options(const FeatureLineOptions& options) {
   check_min_piece_edges(options);
   check_strip_options(options.strip);
   check_snake_options(options.snake);
+  check_crest_options(options.crest);
 }
 
 double mean_feature_strength(const PreparedMesh& pm, const std::vector<SurfacePoint>& points, double feature_sign,

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "engine/crease_fit.h"
+#include "engine/crest_localization.h"
 #include "engine/feature_strip.h"
 #include "engine/initial_line.h"
 #include "engine/prepared_mesh.h"
@@ -18,6 +19,7 @@ struct FeatureLineOptions {
   InitialLineOptions initial;
   StripOptions strip;
   SnakeOptions snake;
+  CrestOptions crest;              ///< sub-edge localisation of the snake's line (stage 3b)
   bool refine = true;              ///< false: stop after the initial line
   bool pin_interior_keys = true;   ///< interior keys stay where the user put them
   /// A strip whose flattening folds over near the line is split in two (the paper's remedy for

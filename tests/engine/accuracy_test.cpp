@@ -98,10 +98,12 @@ struct LineDistances {
   double initial = 0, refined = 0, refined_max = 0;
 };
 
-LineDistances ridge_line(double amplitude, double noise, std::uint64_t seed, int n = 81) {
-  const auto field = make_ridge_field(n, 0.2, seed, amplitude, 0.25, 0.3);
+LineDistances ridge_line(double amplitude, double noise, std::uint64_t seed, int n = 81, const FeatureLineOptions& options = {},
+                         double bend = 0.3) {
+  const auto field = make_ridge_field(n, 0.2, seed, amplitude, 0.25, bend);
   const auto mesh = prepare_mesh(with_noise(field.mesh, noise * field.spacing / mean_edge_length(field.mesh), seed));
   FeatureLineRequest request;
+  request.options = options;
   request.keys = keys_on_crest(field, {-0.8, 0.0, 0.8});
   const auto result = detect_feature_line(*mesh, request);
   const auto refined = crest_distance(field, refined_positions(result));
@@ -133,6 +135,40 @@ TEST(Accuracy, NoisyRidgeOnAFineMeshIsWithinTheTarget) {
   EXPECT_LT(d.refined, 0.15);
   EXPECT_LT(d.refined, 0.5 * d.initial);
   EXPECT_LT(d.refined_max, 1.0);
+}
+
+TEST(CrestLocalization, CleanCrestsBetweenVerticesAreFoundWithinAFewHundredthsOfAnEdge) {
+  // Straight and bent Gaussian crests (the straight one at y = 0.1234, between grid rows) on
+  // jittered grids of 13k and 80k triangles. The snake alone settles where its force balances its
+  // rigidity; the crest fit, inside triangles, must come closer, and never be worse. Distances
+  // include the three keys, which stay on their vertices.
+  FeatureLineOptions snake_only;
+  snake_only.crest.enabled = false;
+  for (const int n : {81, 201})
+    for (const double bend : {0.0, 0.3}) {
+      SCOPED_TRACE("n " + std::to_string(n) + " bend " + std::to_string(bend));
+      const auto with_crest = ridge_line(0.3, 0, 3, n, {}, bend);
+      const auto without = ridge_line(0.3, 0, 3, n, snake_only, bend);
+      EXPECT_LT(with_crest.refined, 0.04);
+      EXPECT_LE(with_crest.refined, without.refined + 1e-3);
+    }
+}
+
+TEST(CrestLocalization, FlatFieldsAndTheOptionOffLeaveTheSnakesLine) {
+  // A circle of a cylinder has no crest across it: the fit finds the field flat and moves nothing.
+  const auto mesh = prepare_mesh(make_cylinder(1.0, 2.0, 12, 48, false));  // ring 6 of 0..12: z = 1
+  FeatureLineRequest request;
+  request.keys = {6 * 48u, 6 * 48u + 16, 6 * 48u + 32};
+  request.closed = true;
+  FeatureLineRequest off = request;
+  off.options.crest.enabled = false;
+  const auto with_crest = detect_feature_line(*mesh, request), without = detect_feature_line(*mesh, off);
+  ASSERT_EQ(with_crest.refined.size(), without.refined.size());
+  for (std::size_t i = 0; i < with_crest.refined.size(); ++i)
+    EXPECT_LT((with_crest.refined[i].position - without.refined[i].position).norm(), 1e-9) << i;
+  FeatureLineOptions bad;
+  bad.crest.radius = 0.5;
+  EXPECT_THROW(check_feature_line_options(bad), InvalidInputError);
 }
 
 // Largest distance of the refined line from the slab's top outline, in outline edge lengths.

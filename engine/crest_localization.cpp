@@ -1,0 +1,217 @@
+#include "engine/crest_localization.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Dense>
+
+#include "engine/errors.h"
+#include "engine/internal/strip_walk.h"
+
+namespace featureline {
+namespace {
+
+// The line's unit normal in the plane at interior point i (central difference of its neighbours).
+Eigen::Vector2d normal_at(const std::vector<StripPoint>& points, std::size_t i) {
+  const Eigen::Vector2d t = (points[i + 1].uv - points[i - 1].uv).normalized();
+  return {-t.y(), t.x()};
+}
+
+// The placed strip vertices bucketed in square cells of the fit radius, so a fit visits the 3 x 3
+// cells around its point instead of the whole strip (a 245k-triangle line's strip has thousands).
+class VertexGrid {
+ public:
+  VertexGrid(const FlatStrip& flat, double cell) : cell_(cell) {
+    low_ = Eigen::Vector2d::Constant(HUGE_VAL);
+    Eigen::Vector2d high = Eigen::Vector2d::Constant(-HUGE_VAL);
+    for (std::size_t v = 0; v < flat.uv.size(); ++v)
+      if (flat.placed[v]) low_ = low_.cwiseMin(flat.uv[v]), high = high.cwiseMax(flat.uv[v]);
+    if (!(high.x() >= low_.x())) return;
+    // At most about 4 cells per placed vertex: a huge radius on a small strip is one cell.
+    const double span = std::max(high.x() - low_.x(), high.y() - low_.y());
+    cell_ = std::max(cell, span / (2 * std::sqrt(double(flat.uv.size())) + 1));
+    columns_ = std::size_t((high.x() - low_.x()) / cell_) + 1;
+    rows_ = std::size_t((high.y() - low_.y()) / cell_) + 1;
+    cells_.resize(columns_ * rows_);
+    for (std::size_t v = 0; v < flat.uv.size(); ++v)
+      if (flat.placed[v]) cells_[index(flat.uv[v])].push_back(std::uint32_t(v));
+  }
+  /// Calls visit(v) for every vertex in the cells within one cell of p.
+  template <typename Visit>
+  void around(const Eigen::Vector2d& p, Visit visit) const {
+    if (cells_.empty()) return;
+    const long cx = long(std::floor((p.x() - low_.x()) / cell_)), cy = long(std::floor((p.y() - low_.y()) / cell_));
+    for (long y = std::max(0L, cy - 1); y <= std::min(long(rows_) - 1, cy + 1); ++y)
+      for (long x = std::max(0L, cx - 1); x <= std::min(long(columns_) - 1, cx + 1); ++x)
+        for (const std::uint32_t v : cells_[std::size_t(y) * columns_ + std::size_t(x)]) visit(v);
+  }
+
+ private:
+  std::size_t index(const Eigen::Vector2d& q) const {
+    const auto x = std::min(columns_ - 1, std::size_t((q.x() - low_.x()) / cell_));
+    const auto y = std::min(rows_ - 1, std::size_t((q.y() - low_.y()) / cell_));
+    return y * columns_ + x;
+  }
+  double cell_;
+  Eigen::Vector2d low_;
+  std::size_t columns_ = 0, rows_ = 0;
+  std::vector<std::vector<std::uint32_t>> cells_;
+};
+
+// The field across the line near one point, from a weighted fit
+// g(s, a) = c0 + c1 s + c2 s^2 + c3 a + c4 a s + c5 a^2 over the placed strip vertices within
+// `radius` (s across the line, a along it; Gaussian weights, sigma = radius / 2).
+struct CrestFit {
+  double offset = std::nan("");  ///< s* = -c1 / (2 c2), the maximum across the line at a = 0; NaN: none (or too flat)
+  double half_width = std::nan("");  ///< where the fitted profile falls to half its peak (strip units)
+};
+
+// A crest is where the field falls off across the line by at least this share of its peak
+// within the fit radius; flatter fields (a cylinder's circle, a plane) have no crest to find.
+constexpr double kMinCrestDrop = 0.02;
+
+// What the fits read of the strip: its layout, its vertices bucketed, the field and the creases.
+struct FitInput {
+  const FlatStrip& flat;
+  const VertexGrid& grid;
+  const std::vector<double>& field;
+  const std::vector<char>& on_crease;
+  double crease_reach;  ///< a crease vertex this close to a point leaves it where it is
+};
+
+CrestFit fit_crest(const FitInput& in, const Eigen::Vector2d& p, const Eigen::Vector2d& n, double radius, double min_drop) {
+  const FlatStrip& flat = in.flat;
+  const Eigen::Vector2d t(n.y(), -n.x());
+  Eigen::Matrix<double, 6, 6> normal_matrix = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
+  const double inv_two_sigma2 = 2.0 / (radius * radius);  // 1 / (2 (radius / 2)^2)
+  int used = 0;
+  bool crease = false;
+  double across_min = 0, across_max = 0;
+  in.grid.around(p, [&](std::uint32_t v) {
+    const Eigen::Vector2d d = flat.uv[v] - p;
+    const double d2 = d.squaredNorm();
+    if (d2 > radius * radius) return;
+    crease = crease || (in.on_crease[v] && d2 <= in.crease_reach * in.crease_reach);
+    const double s = d.dot(n) / radius, a = d.dot(t) / radius;  // scaled: a well-conditioned system
+    Eigen::Matrix<double, 6, 1> row;
+    row << 1, s, s * s, a, a * s, a * a;
+    const double w = std::exp(-d2 * inv_two_sigma2);
+    normal_matrix.noalias() += w * row * row.transpose();
+    rhs.noalias() += w * in.field[v] * row;
+    ++used;
+    across_min = std::min(across_min, s), across_max = std::max(across_max, s);
+  });
+  CrestFit fit;
+  // Six unknowns, and vertices on both sides of the line: otherwise the fit extrapolates. A
+  // crease is a kink, not a peak a quadratic describes: the snake and the crease fit place lines
+  // there (a fit across noisy rocker-arm creases had moved lines 0.02 edge lengths off).
+  if (crease || used < 8 || across_min > -0.25 || across_max < 0.25) return fit;
+  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> solver(normal_matrix);
+  if (solver.info() != Eigen::Success) return fit;
+  const Eigen::Matrix<double, 6, 1> c = solver.solve(rhs);
+  if (!c.allFinite() || !(c[2] < 0)) return fit;
+  const double s = -c[1] / (2 * c[2]);
+  const double peak = c[0] - c[1] * c[1] / (4 * c[2]);
+  if (peak > 0) fit.half_width = std::sqrt(peak / (-2 * c[2])) * radius;
+  if (-c[2] >= min_drop * std::abs(peak)) fit.offset = s * radius;
+  return fit;
+}
+
+// The fit radius for the whole line: the crest's half width (median over the line's points from
+// fits at the smallest radius), within [smallest, largest]. A fit over the crest's own width
+// averages the field's ripple best: on a fine mesh a crest 40 edges wide is almost flat over
+// two edges, and a short fit there follows the ripple rather than the crest.
+double line_fit_radius(const FlatStrip& flat, const std::vector<double>& field, const std::vector<char>& on_crease,
+                       double crease_reach, const std::vector<StripPoint>& points, double smallest, double largest) {
+  std::vector<double> widths;
+  const VertexGrid grid(flat, smallest);
+  const FitInput in{flat, grid, field, on_crease, crease_reach};
+  for (std::size_t i = 1; i + 1 < points.size(); ++i) {
+    const CrestFit fit = fit_crest(in, points[i].uv, normal_at(points, i), smallest, 0);
+    if (std::isfinite(fit.half_width)) widths.push_back(fit.half_width);
+  }
+  if (widths.empty()) return smallest;
+  std::nth_element(widths.begin(), widths.begin() + std::ptrdiff_t(widths.size() / 2), widths.end());
+  return std::clamp(widths[widths.size() / 2], smallest, std::max(smallest, largest));
+}
+
+// (1, 2, 1)/4 passes over the offsets, each weighted by whether its fit found a crest; the
+// line's ends stay where they are (offset 0, full weight).
+std::vector<double> smooth_offsets(const std::vector<double>& offsets, int passes) {
+  const std::size_t n = offsets.size();
+  std::vector<double> value(n), weight(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool found = std::isfinite(offsets[i]);
+    value[i] = found ? offsets[i] : 0;
+    weight[i] = found || i == 0 || i + 1 == n ? 1 : 0;
+  }
+  std::vector<double> next_value(n), next_weight(n);
+  for (int pass = 0; pass < passes; ++pass) {
+    next_value = value, next_weight = weight;
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+      next_value[i] = 0.25 * (value[i - 1] * weight[i - 1] + 2 * value[i] * weight[i] + value[i + 1] * weight[i + 1]);
+      next_weight[i] = 0.25 * (weight[i - 1] + 2 * weight[i] + weight[i + 1]);
+      next_value[i] = next_weight[i] > 0 ? next_value[i] / next_weight[i] : 0;
+    }
+    value.swap(next_value), weight.swap(next_weight);
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (!(weight[i] > 0)) value[i] = 0;
+  return value;
+}
+
+}  // namespace
+
+void check_crest_options(const CrestOptions& o) {
+  using C = CrestOptions;
+  if (!C::radius_range.contains(o.radius) || !C::radius_range.contains(o.max_radius) || !C::max_shift_range.contains(o.max_shift) ||
+      !C::smoothing_passes_range.contains(o.smoothing_passes))
+    throw InvalidInputError("crest options out of range (radius, max_radius " + describe(C::radius_range) + ", max_shift " +
+                            describe(C::max_shift_range) + ", smoothing_passes " + describe(C::smoothing_passes_range) + ")");
+}
+
+CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, const FlatStrip& flat,
+                           const std::vector<StripPoint>& points, double feature_sign, const CrestOptions& o) {
+  CrestResult result;
+  result.points = points;
+  if (!o.enabled || points.size() < 3 || !(strip.mean_edge_length > 0)) return result;
+  std::vector<double> field(strip.vertices.size());
+  std::vector<char> on_crease(strip.vertices.size());
+  for (std::size_t v = 0; v < field.size(); ++v) {
+    field[v] = feature_value(mesh.curvature, strip.vertices[v], feature_sign);
+    on_crease[v] = mesh.curvature.on_crease.empty() ? 0 : mesh.curvature.on_crease[strip.vertices[v]];
+  }
+  const double h = strip.mean_edge_length;
+  // Creases marked by noise are scattered; a crease the line follows has its vertices within
+  // about an edge of the line.
+  const double crease_reach = 1.5 * h;
+  // The strip reaches `rings` edges from its line: a narrower strip than the smallest fit would
+  // leave the fit extrapolating (a 5-edge piece on 2 rings of a noisy part was moved off).
+  const double largest = std::min(o.max_radius, double(strip.rings)) * h;
+  // Never finer than the jet fits the field came from: on a noisy mesh their radius grows with
+  // the noise, and a shorter fit across the line follows the noise they left.
+  const double smallest = std::max(o.radius, mesh.curvature.radius) * h;
+  if (largest < smallest) return result;
+  const double radius = line_fit_radius(flat, field, on_crease, crease_reach, points, smallest, largest);
+  result.radius = radius / h;
+  std::vector<double> offsets(points.size(), std::nan(""));
+  offsets.front() = offsets.back() = 0;
+  const VertexGrid grid(flat, radius);
+  const FitInput in{flat, grid, field, on_crease, crease_reach};
+  for (std::size_t i = 1; i + 1 < points.size(); ++i) {
+    const double s = fit_crest(in, points[i].uv, normal_at(points, i), radius, kMinCrestDrop).offset;
+    if (std::abs(s) <= o.max_shift * h) offsets[i] = s, ++result.moved;
+  }
+  const std::vector<double> smoothed = smooth_offsets(offsets, o.smoothing_passes);
+  double shifted = 0;
+  for (std::size_t i = 1; i + 1 < points.size(); ++i) {
+    if (smoothed[i] == 0) continue;
+    move_along_segment(strip, flat, result.points[i], points[i].uv + smoothed[i] * normal_at(points, i));
+    shifted += (result.points[i].uv - points[i].uv).norm();
+  }
+  result.mean_shift = shifted / double(points.size() - 2) / h;
+  return result;
+}
+
+}  // namespace featureline
