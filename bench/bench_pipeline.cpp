@@ -5,13 +5,14 @@
 // Then the preparation's own stages (medians over --prepare-runs preparations of each mesh), so
 // a change to prepare_mesh shows where its time went.
 //
-// usage: bench_pipeline [--lines N] [--prepare-runs R] [--dump-curvature DIR] [MESH ...]
+// usage: bench_pipeline [--lines N] [--prepare-runs R] [--dump-curvature DIR] [--no-crest] [MESH ...]
 //   (default meshes: the four of the README)
 //   --lines N            lines per mesh (default 40; 0: preparation only)
 //   --prepare-runs R     preparations per mesh for the breakdown (default 3)
 //   --dump-curvature DIR writes DIR/<mesh>.curvature: the field's scalars, then per vertex mean,
 //                        k_max, k_min (%.17g), then the crease flags; two dumps compared tell
 //                        whether a change to the curvature stage changed its results
+//   --no-crest           lines without crest localisation (its cost is in the snake column)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -84,6 +85,7 @@ void dump_curvature(const PreparedMesh& mesh, const std::string& path) {
 
 int main(int argc, char** argv) {
   int lines = 40, prepare_runs = 3;
+  bool crest = true;  // --no-crest: the snake's line, to measure what crest localisation costs
   std::string dump_dir;
   std::vector<std::string> meshes;
   for (int i = 1; i < argc; ++i) {
@@ -91,6 +93,7 @@ int main(int argc, char** argv) {
     if (arg == "--lines" && i + 1 < argc) lines = std::max(0, std::atoi(argv[++i]));
     else if (arg == "--prepare-runs" && i + 1 < argc) prepare_runs = std::max(1, std::atoi(argv[++i]));
     else if (arg == "--dump-curvature" && i + 1 < argc) dump_dir = argv[++i];
+    else if (arg == "--no-crest") crest = false;
     else meshes.push_back(arg);
   }
   if (meshes.empty())
@@ -124,6 +127,7 @@ int main(int argc, char** argv) {
       for (int i = 0; i < lines; ++i) {
         FeatureLineRequest request;
         request.keys = pick_feature_keys(*mesh, rng);
+        request.options.crest.enabled = crest;
         if (request.keys.empty()) break;
         const auto r = detect_feature_line(*mesh, request);
         initial.push_back(r.timings.initial_ms);
