@@ -10,10 +10,11 @@
 
 namespace featureline {
 
-/// A GLB holding, when `include_mesh`, the mesh (POSITION, NORMAL, indices, and the signed mean
-/// curvature as the custom vertex attribute _CURVATURE), and for every result its initial line
-/// (orange) and refined line (cyan) as LINE_STRIP primitives (LINE_LOOP for closed lines) with
-/// COLOR_0 as normalised RGBA8 (linear colour, as glTF requires).
+/// A GLB holding, when `include_mesh`, the mesh (POSITION, NORMAL, indices, and the engine's
+/// feature field, the dominant signed principal curvature, as the custom vertex attribute
+/// _CURVATURE), and for every result its initial line (orange) and refined line (cyan) as
+/// LINE_STRIP primitives (LINE_LOOP for closed lines) with COLOR_0 as normalised RGBA8 (linear
+/// colour, as glTF requires).
 std::string feature_line_to_glb(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& results, bool include_mesh);
 
 /// The mesh alone in a compact GLB for downloads (KHR_mesh_quantization, required): positions as

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "engine/feature_line.h"
+#include "engine/surface_point.h"
 
 namespace featureline {
 namespace {

@@ -138,7 +138,7 @@ void keep_initial(PieceWork& work, std::string reason) {
 bool split_where_folded(const LineRun& run, const Piece& piece, const FlatStrip& flat, std::deque<Piece>& pieces) {
   const std::size_t shortest = std::size_t(run.options.min_piece_edges);
   if (flat.flipped_near_line == 0 || piece.end - piece.begin < 2 * shortest) return false;
-  const std::size_t at = std::clamp(piece.begin + flat.worst_flip_line_index, piece.begin + shortest, piece.end - shortest);
+  const std::size_t at = std::clamp(piece.begin + flat.first_flip_line_index, piece.begin + shortest, piece.end - shortest);
   pieces.push_front({at, piece.end, false});
   pieces.push_front({piece.begin, at, false});
   return true;

@@ -362,7 +362,7 @@ void mark_valid_triangles(const PreparedMesh& pm, const FeatureStrip& strip, con
     for (auto v : t)
       if (line_index[v] >= 0) {
         ++flat.flipped_near_line;
-        if (first_near) flat.worst_flip_line_index = std::size_t(line_index[v]);
+        if (first_near) flat.first_flip_line_index = std::size_t(line_index[v]);
         first_near = false;
         break;
       }

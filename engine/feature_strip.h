@@ -85,7 +85,7 @@ struct FlatStrip {
   std::size_t flipped_triangles = 0; ///< placed triangles whose orientation reversed (fold-overs)
   std::size_t distorted_triangles = 0;  ///< triangles left out for exceeding max_edge_distortion
   std::size_t flipped_near_line = 0; ///< of those, how many touch the line (these break the snake)
-  std::size_t worst_flip_line_index = 0;  ///< index in `line` nearest a flip, where to split
+  std::size_t first_flip_line_index = 0;  ///< index in `line` of the first flip touching it, where to split
 };
 
 /// Lays the strip out in the plane (StripOptions::flattening), then marks the triangles the
