@@ -10,6 +10,15 @@ TMP=$(mktemp -d "${TMPDIR:-/tmp}/featureline-memory.XXXXXX")
 trap cleanup EXIT
 CACHE_MB=64
 PEAK_LIMIT_KB=$(((3 * CACHE_MB + 64) * 1024))
+LIMIT_TEXT="3 x --cache-mb + 64 MB"
+if [ "$FACTOR" -gt 1 ]; then
+  # A sanitizer build: AddressSanitizer keeps freed blocks in a quarantine (256 MB by default)
+  # and adds shadow memory, so its resident memory measures ASan, not the server. Keep the
+  # quarantine small and allow twice the budget; the Release build is held to the budget itself.
+  export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}quarantine_size_mb=16"
+  PEAK_LIMIT_KB=$((2 * PEAK_LIMIT_KB))
+  LIMIT_TEXT="2 x (3 x --cache-mb + 64 MB) under a sanitizer"
+fi
 peak_kb() { sed -n 's/^VmHWM:[[:space:]]*\([0-9]*\) kB$/\1/p' "/proc/$1/status"; }
 
 start_server main --cache-mb $CACHE_MB --quiet --preload samples/ridge_field.off || { finish; exit 1; }
@@ -55,7 +64,7 @@ burst() {
   check_eq "$name: a normal client meanwhile gets every line (200)" "$(sort -u "$TMP/$name.normal")" 200
   local peak; peak=$(peak_kb "$PID")
   echo "#    $name: peak resident memory $((peak / 1024)) MB (limit $((PEAK_LIMIT_KB / 1024)) MB)"
-  check "$name: peak resident memory within 3 x --cache-mb + 64 MB" [ "$peak" -lt "$PEAK_LIMIT_KB" ]
+  check "$name: peak resident memory within $LIMIT_TEXT" [ "$peak" -lt "$PEAK_LIMIT_KB" ]
 }
 
 # 4 MiB of tiny containers: about 100 bytes of DOM per 3 bytes of text.
@@ -114,7 +123,7 @@ check_eq "... 400 malformed_mesh" "$STATUS/$(error_code "$TMP/a 1e300 coordinate
 check "... naming the vertex and the bound" grep -q 'vertex 1 has a coordinate of magnitude 1e+300, above the 1e15' "$TMP/a 1e300 coordinate.json"
 peak=$(peak_kb "$PID")
 echo "#    after the expanding files: peak resident memory $((peak / 1024)) MB (limit $((PEAK_LIMIT_KB / 1024)) MB)"
-check "expanding files: peak resident memory within 3 x --cache-mb + 64 MB" [ "$peak" -lt "$PEAK_LIMIT_KB" ]
+check "expanding files: peak resident memory within $LIMIT_TEXT" [ "$peak" -lt "$PEAK_LIMIT_KB" ]
 
 http "$TMP/ok.json" -X POST -H 'Content-Type: application/json' -d "$LINE" "$B/v1/meshes/$id/feature-lines"
 check_eq "afterwards a line answers 200" "$STATUS" 200
