@@ -39,7 +39,7 @@ class VertexGrid {
   /// Calls visit(v) for every vertex in the cells within one cell of p.
   template <typename Visit>
   void around(const Eigen::Vector2d& p, Visit visit) const {
-    if (cells_.empty()) return;
+    if (cells_.empty() || !p.allFinite()) return;
     const long cx = long(std::floor((p.x() - low_.x()) / cell_)), cy = long(std::floor((p.y() - low_.y()) / cell_));
     for (long y = std::max(0L, cy - 1); y <= std::min(long(rows_) - 1, cy + 1); ++y)
       for (long x = std::max(0L, cx - 1); x <= std::min(long(columns_) - 1, cx + 1); ++x)
