@@ -6,12 +6,13 @@
 # root file system is mounted (podman create + podman mount) and its entrypoint runs there under
 # chroot as the image's user, with /proc mounted in a private mount namespace (gone with the
 # server). Against it: /healthz, an upload of samples/ridge_field.off, a feature line, the page at
-# /, the upload written to /var/lib/featureline, and the process's user ids.
-# Prints the build context's size, the build time and the image's size.
+# /, the upload written to /var/lib/featureline, and the process's user ids. Then the CLI image
+# (docker/Dockerfile) is built the same way and its command run in its root file system.
+# Prints the build context's size, each build's time and each image's size.
 #
-#   bash tests/integration/image_test.sh      (as root; about 5-10 minutes on 2 cores when the
-#                                              sources changed, seconds when podman's cache holds
-#                                              every layer)
+#   bash tests/integration/image_test.sh      (as root; about 5-10 minutes per image on 2 cores
+#                                              when the sources changed, seconds when podman's
+#                                              cache holds every layer)
 # It needs no build of this checkout: the image builds the server from source.
 set -u
 
@@ -22,6 +23,7 @@ for tool in curl jq unshare chroot; do command -v "$tool" >/dev/null || { echo "
 FACTOR=1
 CURL_MAX=60
 IMAGE=featureline-server:test
+CLI_IMAGE=featureline:test
 CONTEXT_IMAGE=featureline-context:test
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/featureline-image.XXXXXX")
 CONTAINERS=()
@@ -83,30 +85,40 @@ else
   fail "the build context can be copied into an image" "$(tail -n 20 "$TMP/context.log")"
 fi
 
-# ---- the server image
-old_id=$(podman image inspect --format '{{.Id}}' "$IMAGE" 2>/dev/null)
-start=$(date +%s)
-"${BUILD[@]}" -f docker/Dockerfile.server -t "$IMAGE" . >"$TMP/build.log" 2>&1
-rc=$?
-seconds=$(($(date +%s) - start))
-if [ $rc != 0 ]; then
-  fail "podman build docker/Dockerfile.server (exit $rc after $seconds s)" "$(tail -n 30 "$TMP/build.log")"
-  finish; exit 1
-fi
-pass "podman build docker/Dockerfile.server"
-new_id=$(podman image inspect --format '{{.Id}}' "$IMAGE")
-# The previous build's image, now untagged, is no use to the layer cache (its build stage is).
-if [ -n "$old_id" ] && [ "$old_id" != "$new_id" ]; then podman rmi "$old_id" >/dev/null 2>&1; fi
-size=$(podman image inspect --format '{{.Size}}' "$IMAGE")
-cached=$(grep -c -- '--> Using cache' "$TMP/build.log")
-echo "# build: $seconds s ($cached steps from podman's cache); image $IMAGE: $((size / 1000000)) MB"
+# build_image DOCKERFILE TAG: podman build with the flags above; prints the time and the size.
+build_image() {
+  local file=$1 tag=$2 old new start rc seconds size cached log="$TMP/build.$(basename "$1").log"
+  old=$(podman image inspect --format '{{.Id}}' "$tag" 2>/dev/null)
+  start=$(date +%s)
+  "${BUILD[@]}" -f "$file" -t "$tag" . >"$log" 2>&1
+  rc=$?
+  seconds=$(($(date +%s) - start))
+  if [ $rc != 0 ]; then
+    fail "podman build $file (exit $rc after $seconds s)" "$(tail -n 30 "$log")"
+    return 1
+  fi
+  pass "podman build $file"
+  new=$(podman image inspect --format '{{.Id}}' "$tag")
+  # The previous build's image, now untagged, is no use to the layer cache.
+  if [ -n "$old" ] && [ "$old" != "$new" ]; then podman rmi "$old" >/dev/null 2>&1; fi
+  size=$(podman image inspect --format '{{.Size}}' "$tag")
+  cached=$(grep -c -- '--> Using cache' "$log")
+  echo "# build of $file: $seconds s ($cached steps from podman's cache); image $tag: $((size / 1000000)) MB"
+}
+# image_path TAG: the PATH of the image's environment (Debian's default when it sets none).
+image_path() {
+  local path
+  path=$(podman image inspect --format '{{json .Config.Env}}' "$1" | jq -r '.[]? | select(startswith("PATH=")) | sub("^PATH="; "")')
+  echo "${path:-/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin}"
+}
 
+# ---- the server image
+build_image docker/Dockerfile.server "$IMAGE" || { finish; exit 1; }
 user=$(podman image inspect --format '{{.Config.User}}' "$IMAGE")
 check_eq "the image's user" "${user%%:*}" 10001
 entry=$(podman image inspect --format '{{json .Config.Entrypoint}}' "$IMAGE" | jq -r '.[0] // empty')
 check_eq "the image's entrypoint program" "$entry" featureline-server
-path=$(podman image inspect --format '{{json .Config.Env}}' "$IMAGE" | jq -r '.[] | select(startswith("PATH=")) | sub("^PATH="; "")')
-[ -n "$path" ] || path=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
+path=$(image_path "$IMAGE")
 
 # ---- the image run: its root file system, chroot as its user
 mount_image "$IMAGE" || { finish; exit 1; }
@@ -179,5 +191,27 @@ stop_server image
 check_eq "the server exits with 0 on SIGTERM" "$STOP_RC" 0
 check "no mount is left in the image's root file system" bash -c "! findmnt -rn -o TARGET | grep -qF '$ROOTFS/'"
 check "the container is unmounted and removed" unmount_image
+
+# ---- the CLI image (docker/Dockerfile: scripts/setup.sh inside Debian 12), its command run as
+# the image runs it: as root (no USER), from its working directory.
+build_image docker/Dockerfile "$CLI_IMAGE" || { finish; exit 1; }
+mount_image "$CLI_IMAGE" || { finish; exit 1; }
+workdir=$(podman image inspect --format '{{.Config.WorkingDir}}' "$CLI_IMAGE")
+mapfile -t command < <(podman image inspect --format '{{json .Config.Cmd}}' "$CLI_IMAGE" | jq -r '.[]?')
+check_eq "the CLI image's command" "${command[*]:0:2}" "featureline detect"
+start=$(date +%s)
+inner='cd "$0" && exec "$@"'
+timeout 120 env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin unshare --mount --propagation private /bin/sh -c '
+  mount -t proc proc "$1/proc" || exit 97
+  path=$0 root=$1 inner=$2; shift 2
+  exec chroot "$root" /usr/bin/env -i "PATH=$path" HOME=/root /bin/sh -c "$inner" "$@"' \
+  "$(image_path "$CLI_IMAGE")" "$ROOTFS" "$inner" "${workdir:-/}" "${command[@]}" >"$TMP/cli.json" 2>"$TMP/cli.err"
+rc=$?
+check_eq "the CLI image's command exits with 0" "$rc" 0
+[ "$rc" = 0 ] || sed 's/^/       | /' "$TMP/cli.err" | tail -n 10
+points=$(jq '.refined.points | length' "$TMP/cli.json" 2>/dev/null)
+check "its answer is a feature line with refined points" test "${points:-0}" -ge 2
+echo "# CLI image: ${command[*]}: $points refined points in $(($(date +%s) - start)) s"
+check "the CLI container is unmounted and removed" unmount_image
 
 finish
