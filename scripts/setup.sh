@@ -11,10 +11,12 @@ packages=(g++ cmake ninja-build pkg-config git ca-certificates
   libgtest-dev libcli11-dev jq curl zlib1g-dev libnanoflann-dev libhiredis-dev help2man)
 # What only the tests use (scripts/test.sh sets FEATURELINE_TEST_TOOLS=1): the browser, the
 # cluster's nginx and Redis, the deployment files' YAML check, ss for free ports, what CPack
-# reads the .deb's dependencies with (dpkg-shlibdeps, file), and the independent readers the
-# export formats are read back with (meshio, Open3D, VTK).
+# reads the .deb's dependencies with (dpkg-shlibdeps, file), the independent readers the
+# export formats are read back with (meshio, Open3D, VTK), and what the server image is built
+# and run with (podman; debootstrap for its base when no registry has debian:12).
 if [ "${FEATURELINE_TEST_TOOLS:-0}" = 1 ]; then
-  packages+=(chromium nginx redis-server python3-yaml iproute2 dpkg-dev file python3-meshio python3-open3d python3-vtk9)
+  packages+=(chromium nginx redis-server python3-yaml iproute2 dpkg-dev file python3-meshio python3-open3d python3-vtk9
+    podman debootstrap)
 fi
 # The fuzz build (scripts/test.sh, scripts/fuzz.sh) compiles with clang and links libFuzzer.
 case " $* " in *clang*) packages+=(clang libclang-rt-14-dev) ;; esac
@@ -32,21 +34,7 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 if [ ! -f node_modules/.package-lock.json ] || [ package-lock.json -nt node_modules/.package-lock.json ]; then
   echo "setup: npm ci"
-  npm_log=$(mktemp)
-  if ! npm ci --no-audit --no-fund --loglevel=error 2>"$npm_log"; then
-    if grep -q -i -E "certificate|CERT_" "$npm_log"; then
-      # Behind a TLS-intercepting proxy whose CA this machine does not trust. Every tarball is
-      # still checked against the sha512 integrity hash recorded in package-lock.json.
-      echo "setup: npm could not verify the registry's certificate; retrying without TLS verification" \
-           "(packages are still verified against package-lock.json's integrity hashes)"
-      npm ci --no-audit --no-fund --loglevel=error --strict-ssl=false
-    else
-      cat "$npm_log" >&2
-      rm -f "$npm_log"
-      exit 1
-    fi
-  fi
-  rm -f "$npm_log"
+  scripts/npm-ci.sh
 fi
 
 build=${BUILD_DIR:-build}
