@@ -194,7 +194,6 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
   const double smallest = std::max(o.radius, mesh.curvature.radius) * h;
   if (largest < smallest) return result;
   const double radius = line_fit_radius(flat, field, on_crease, crease_reach, points, smallest, largest);
-  result.radius = radius / h;
   std::vector<double> offsets(points.size(), std::nan(""));
   offsets.front() = offsets.back() = 0;
   const VertexGrid grid(flat, radius);
@@ -204,13 +203,8 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
     if (std::abs(s) <= o.max_shift * h) offsets[i] = s, ++result.moved;
   }
   const std::vector<double> smoothed = smooth_offsets(offsets, o.smoothing_passes);
-  double shifted = 0;
-  for (std::size_t i = 1; i + 1 < points.size(); ++i) {
-    if (smoothed[i] == 0) continue;
-    move_along_segment(strip, flat, result.points[i], points[i].uv + smoothed[i] * normal_at(points, i));
-    shifted += (result.points[i].uv - points[i].uv).norm();
-  }
-  result.mean_shift = shifted / double(points.size() - 2) / h;
+  for (std::size_t i = 1; i + 1 < points.size(); ++i)
+    if (smoothed[i] != 0) move_along_segment(strip, flat, result.points[i], points[i].uv + smoothed[i] * normal_at(points, i));
   return result;
 }
 

@@ -38,8 +38,6 @@ void check_crest_options(const CrestOptions& options);
 struct CrestResult {
   std::vector<StripPoint> points;  ///< the line, ends unchanged
   std::size_t moved = 0;           ///< interior points whose fit found a crest within max_shift
-  double mean_shift = 0;           ///< mean |offset| applied, in the strip's mean edge lengths
-  double radius = 0;               ///< the fit radius used, in the strip's mean edge lengths
 };
 
 /// Moves the interior points of `points` (a line on the flattened strip, ends pinned) across the
