@@ -225,10 +225,14 @@ bool refine_piece(const LineRun& run, PieceWork& work, std::deque<Piece>& pieces
   return true;
 }
 
-// The line's snake options: the sign of the keys' feature when the request leaves it open.
-SnakeOptions line_snake_options(const PreparedMesh& pm, const FeatureLineRequest& request) {
+// The line's snake options: when the request leaves the sign open, the traced feature's sign,
+// or that of the keys' feature.
+SnakeOptions line_snake_options(const PreparedMesh& pm, const FeatureLineRequest& request, const FeatureLineResult& result) {
   SnakeOptions snake = request.options.snake;
-  if (snake.feature_sign == 0 && request.options.initial.sign_aware)
+  if (snake.feature_sign != 0) return snake;
+  if (result.trace)
+    snake.feature_sign = result.trace->sign == FeatureSign::ridge ? 1.0 : -1.0;
+  else if (request.options.initial.sign_aware)
     snake.feature_sign = keys_feature_sign(pm, request.keys, request.options.initial);
   return snake;
 }
@@ -245,6 +249,7 @@ void check_feature_line_options(const FeatureLineOptions& options) {
   check_strip_options(options.strip);
   check_snake_options(options.snake);
   check_crest_options(options.crest);
+  check_trace_options(options.trace);
 }
 
 double mean_feature_strength(const PreparedMesh& pm, const std::vector<SurfacePoint>& points, double feature_sign,
@@ -273,6 +278,34 @@ double polyline_length(const std::vector<SurfacePoint>& points, bool closed) {
   return length;
 }
 
+namespace {
+
+// A traced line as stage 1's result: its ends are its keys (a loop is pinned at its first vertex
+// and half way round, so it is refined as two open pieces like any closed line).
+InitialLineResult initial_line_from_trace(const PreparedMesh& pm, const TraceResult& trace) {
+  InitialLineResult initial;
+  initial.vertices = trace.vertices;
+  const std::size_t n = trace.vertices.size();
+  initial.key_indices = trace.closed ? std::vector<std::size_t>{0, n / 2} : std::vector<std::size_t>{0, n - 1};
+  initial.length = path_length(pm, initial.vertices, trace.closed);
+  return initial;
+}
+
+void trace_initial_line(const PreparedMesh& pm, const FeatureLineRequest& request, FeatureLineResult& result) {
+  if (request.keys.size() != 1)
+    throw InvalidInputError("a traced line starts from exactly one key (" + std::to_string(request.keys.size()) + " given)");
+  if (request.closed) throw InvalidInputError("a traced line is closed when its feature closes: \"closed\" must be left out");
+  TraceOptions options = request.options.trace;
+  options.max_edges = std::min(options.max_edges, request.options.initial.max_edges);
+  result.trace = trace_feature(pm, request.keys.front(), options, request.cancel);
+  result.initial = initial_line_from_trace(pm, *result.trace);
+  result.closed = result.trace->closed;
+  result.keys.clear();
+  for (auto i : result.initial.key_indices) result.keys.push_back(result.initial.vertices[i]);
+}
+
+}  // namespace
+
 FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineRequest& request) {
   const auto start = Clock::now();
   const FeatureLineOptions& options = request.options;
@@ -281,21 +314,25 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   result.keys = request.keys;
   result.closed = request.closed;
 
-  result.initial = find_initial_line(pm, request.keys, request.closed, options.initial, request.cancel);
+  if (request.trace)
+    trace_initial_line(pm, request, result);
+  else
+    result.initial = find_initial_line(pm, request.keys, request.closed, options.initial, request.cancel);
   result.warnings = result.initial.warnings;
   for (auto v : result.initial.vertices) result.initial_points.push_back(pm.positions[v]);
   result.timings.initial_ms = ms_since(start);
 
-  const UnrolledLine line = unroll(result.initial, request.closed);
+  const bool closed = result.closed;
+  const UnrolledLine line = unroll(result.initial, closed);
   if (!options.refine || line.vertices.size() < 3) {
     result.refined = vertex_points(pm, result.initial.vertices);
-    result.refined_length = polyline_length(result.refined, request.closed);
+    result.refined_length = polyline_length(result.refined, closed);
     result.timings.total_ms = ms_since(start);
     return result;
   }
 
-  std::deque<Piece> pieces = pinned_pieces(line, options.pin_interior_keys, request.closed, result.warnings);
-  const SnakeOptions snake_options = line_snake_options(pm, request);
+  std::deque<Piece> pieces = pinned_pieces(line, options.pin_interior_keys, closed, result.warnings);
+  const SnakeOptions snake_options = line_snake_options(pm, request, result);
   mark_crease_pieces(pm, options, line.vertices, snake_options.feature_sign, pieces);
   const LineRun run{pm, options, snake_options, request.cancel, line.vertices};
   std::vector<SurfacePoint>& refined = result.refined;
@@ -309,8 +346,8 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
     // Pieces meet at pinned vertices: keep the shared point once.
     refined.insert(refined.end(), work.points.begin() + (refined.empty() ? 0 : 1), work.points.end());
   }
-  if (request.closed && refined.size() > 1) refined.pop_back();  // back at the first key
-  result.refined_length = polyline_length(refined, request.closed);
+  if (closed && refined.size() > 1) refined.pop_back();  // back at the first key
+  result.refined_length = polyline_length(refined, closed);
   result.timings.total_ms = ms_since(start);
   return result;
 }

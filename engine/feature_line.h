@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "engine/initial_line.h"
 #include "engine/prepared_mesh.h"
 #include "engine/snake.h"
+#include "engine/trace.h"
 
 namespace featureline {
 
@@ -20,6 +22,7 @@ struct FeatureLineOptions {
   StripOptions strip;
   SnakeOptions snake;
   CrestOptions crest;              ///< sub-edge localisation of the snake's line (stage 3b)
+  TraceOptions trace;              ///< how a line from one key follows its feature (engine/trace.h)
   bool refine = true;              ///< false: stop after the initial line
   bool pin_interior_keys = true;   ///< interior keys stay where the user put them
   /// A strip whose flattening folds over near the line is split in two (the paper's remedy for
@@ -52,6 +55,9 @@ void check_feature_line_options(const FeatureLineOptions& options);
 struct FeatureLineRequest {
   std::vector<std::uint32_t> keys;
   bool closed = false;
+  /// One key: the line is the feature through it, traced both ways (engine/trace.h) instead of
+  /// joined between keys; the trace decides whether it is closed.
+  bool trace = false;
   FeatureLineOptions options;
   /// Stops the work early with CancelledError when requested (deadline, client gone); null: never.
   const Cancellation* cancel = nullptr;
@@ -77,8 +83,11 @@ struct StageTimings {
 };
 
 struct FeatureLineResult {
+  /// The line's keys: the request's, or for a traced line its ends (a closed one: its first
+  /// vertex and the vertex half way round).
   std::vector<std::uint32_t> keys;
   bool closed = false;
+  std::optional<TraceResult> trace;  ///< how a traced line was found
   InitialLineResult initial;
   std::vector<Eigen::Vector3d> initial_points;
   /// The refined line on the surface. A closed line does not repeat its first point.

@@ -164,81 +164,103 @@ double length_weighted_dihedral_degrees(const PreparedMesh& mesh, const CreaseCh
   return weight > 0 ? sum / weight * 180 / kPi : 0.0;
 }
 
+// v and its two rings of edges, leaving out vertices on creases and not passing through them
+// (across a crease lies another surface). A two-ring has a few dozen vertices, so a linear
+// search of what was visited is cheaper than a mesh-sized table.
+void two_rings_off_creases(const PreparedMesh& mesh, std::uint32_t v, std::vector<std::uint32_t>& hood) {
+  std::vector<std::uint32_t> visited{v}, frontier{v}, next;
+  hood.assign(1, v);
+  for (int ring = 0; ring < 2; ++ring) {
+    next.clear();
+    for (auto u : frontier)
+      for (auto k = mesh.neighbor_offsets[u]; k < mesh.neighbor_offsets[u + 1]; ++k) {
+        const auto w = mesh.neighbors[k];
+        if (std::find(visited.begin(), visited.end(), w) != visited.end()) continue;
+        visited.push_back(w);
+        if (mesh.curvature.on_crease[w]) continue;
+        hood.push_back(w);
+        next.push_back(w);
+      }
+    frontier.swap(next);
+  }
+}
+
+// A quadratic fitted to the feature field of `sign` over v's two rings (two_rings_off_creases),
+// in v's tangent plane, in units of its local edge length h: f = c0 + c1 x + c2 y + c3 x^2/2 +
+// c4 xy + c5 y^2/2, with the Hessian's eigen-decomposition (eigenvalues ascending: across the
+// crest first, along it second).
+struct FieldFit {
+  Eigen::Vector3d u, w;  ///< the tangent frame (x along u, y along w)
+  Eigen::MatrixXd A;     ///< one row per fitted vertex, v first: 1, x, y, x^2/2, xy, y^2/2
+  Eigen::VectorXd values;
+  Eigen::Vector2d gradient;
+  double across = 0, along = 0;
+  Eigen::Vector2d across_direction, along_direction;
+  Eigen::Vector3d along_3d() const { return (along_direction.x() * u + along_direction.y() * w).normalized(); }
+};
+
+std::optional<FieldFit> fit_field(const PreparedMesh& mesh, std::uint32_t v, double sign) {
+  const auto& P = mesh.positions;
+  const Eigen::Vector3d normal = mesh.vertex_normals[v];
+  const double h = local_edge_length(mesh, v);
+  if (!(normal.squaredNorm() > 0) || !(h > 0)) return std::nullopt;
+  std::vector<std::uint32_t> hood;
+  two_rings_off_creases(mesh, v, hood);
+  if (hood.size() < 8) return std::nullopt;
+  FieldFit fit;
+  fit.u = normal.unitOrthogonal();
+  fit.w = normal.normalized().cross(fit.u);
+  fit.A.resize(Eigen::Index(hood.size()), 6);
+  fit.values.resize(Eigen::Index(hood.size()));
+  for (std::size_t i = 0; i < hood.size(); ++i) {
+    const Eigen::Vector3d d = (P[hood[i]] - P[v]) / h;
+    const double x = d.dot(fit.u), y = d.dot(fit.w);
+    fit.A.row(Eigen::Index(i)) << 1, x, y, 0.5 * x * x, x * y, 0.5 * y * y;
+    fit.values[Eigen::Index(i)] = feature_value(mesh.curvature, hood[i], sign);
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(fit.A);
+  if (qr.rank() < 6) return std::nullopt;
+  const Eigen::VectorXd c = qr.solve(fit.values);
+  Eigen::Matrix2d hessian;
+  hessian << c[3], c[4], c[4], c[5];
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(hessian);
+  fit.gradient = Eigen::Vector2d(c[1], c[2]);
+  fit.across = eigen.eigenvalues()[0];
+  fit.along = eigen.eigenvalues()[1];
+  fit.across_direction = eigen.eigenvectors().col(0);
+  fit.along_direction = eigen.eigenvectors().col(1);
+  return fit;
+}
+
 struct CrestTest {
   bool on_crest = false;
   std::optional<Eigen::Vector3d> direction;
 };
 
-// Breadth-first scratch for the two-ring neighbourhoods of the crest fits.
-struct RingScratch {
-  std::vector<std::uint32_t> stamp, hood, frontier, next;
-  std::uint32_t generation = 0;
-};
-
-// Is v on a crest of the feature field of `sign`? The field over v's two rings (vertices on
-// creases left out and not passed through: across a crease lies another surface) is fitted by a
-// quadratic in v's tangent plane, in units of its local edge length h. Across the crest (the
-// Hessian's most negative direction) the fitted parabola's peak must lie within kCrestOffset,
-// the field must not rise faster along than it falls across, and no vertex across may be
-// clearly stronger than v. The crest's direction is the Hessian's other eigenvector.
-CrestTest test_crest(const PreparedMesh& mesh, std::uint32_t v, double sign, RingScratch& scratch) {
+// Is v on a crest of the feature field of `sign`? Across the crest (the fitted Hessian's most
+// negative direction) the fitted parabola's peak must lie within kCrestOffset, the field must
+// not rise faster along than it falls across, and no vertex across may be clearly stronger than
+// v. The crest's direction is the Hessian's other eigenvector.
+CrestTest test_crest(const PreparedMesh& mesh, std::uint32_t v, double sign) {
   CrestTest test;
-  const auto& P = mesh.positions;
-  const Eigen::Vector3d normal = mesh.vertex_normals[v];
-  const double h = local_edge_length(mesh, v);
-  if (!(normal.squaredNorm() > 0) || !(h > 0)) return test;
-  if (++scratch.generation == 0) std::fill(scratch.stamp.begin(), scratch.stamp.end(), 0), scratch.generation = 1;
-  scratch.hood.assign(1, v);
-  scratch.frontier.assign(1, v);
-  scratch.stamp[v] = scratch.generation;
-  for (int ring = 0; ring < 2; ++ring) {
-    scratch.next.clear();
-    for (auto u : scratch.frontier)
-      for (auto k = mesh.neighbor_offsets[u]; k < mesh.neighbor_offsets[u + 1]; ++k) {
-        const auto w = mesh.neighbors[k];
-        if (scratch.stamp[w] == scratch.generation) continue;
-        scratch.stamp[w] = scratch.generation;
-        if (mesh.curvature.on_crease[w]) continue;
-        scratch.hood.push_back(w);
-        scratch.next.push_back(w);
-      }
-    scratch.frontier.swap(scratch.next);
-  }
-  if (scratch.hood.size() < 8) return test;
-  const Eigen::Vector3d u = normal.unitOrthogonal(), w = normal.normalized().cross(u);
-  Eigen::MatrixXd A(scratch.hood.size(), 6);
-  Eigen::VectorXd values(scratch.hood.size());
-  for (std::size_t i = 0; i < scratch.hood.size(); ++i) {
-    const Eigen::Vector3d d = (P[scratch.hood[i]] - P[v]) / h;
-    const double x = d.dot(u), y = d.dot(w);
-    A.row(Eigen::Index(i)) << 1, x, y, 0.5 * x * x, x * y, 0.5 * y * y;
-    values[Eigen::Index(i)] = feature_value(mesh.curvature, scratch.hood[i], sign);
-  }
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
-  if (qr.rank() < 6) return test;
-  const Eigen::VectorXd c = qr.solve(values);
-  Eigen::Matrix2d hessian;
-  hessian << c[3], c[4], c[4], c[5];
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(hessian);
-  const double across = eigen.eigenvalues()[0], along = eigen.eigenvalues()[1];
+  const std::optional<FieldFit> fit = fit_field(mesh, v, sign);
+  if (!fit) return test;
+  const double across = fit->across, along = fit->along;
   // A crest falls across it faster than it rises along it; the other way round is a saddle of
   // the field (where k_max turns from one direction to the other on a bent ridge's inner side).
   if (!(across < 0) || !(along <= -across)) return test;
-  const Eigen::Vector2d gradient(c[1], c[2]);
-  const double offset = -gradient.dot(eigen.eigenvectors().col(0)) / across;
+  const double offset = -fit->gradient.dot(fit->across_direction) / across;
   if (!(std::abs(offset) <= kCrestOffset)) return test;
   // The fit can pass a flank vertex of a noisy field; the field's own values across the crest
   // must not rise much above v's anywhere within the two rings.
-  const Eigen::Vector2d across_direction = eigen.eigenvectors().col(0);
-  for (Eigen::Index i = 1; i < A.rows(); ++i) {
-    const Eigen::Vector2d d(A(i, 1), A(i, 2));
-    if (std::abs(d.dot(across_direction)) >= kAcrossCone * d.norm() && values[i] > (1 + kAcrossRise) * values[0])
+  for (Eigen::Index i = 1; i < fit->A.rows(); ++i) {
+    const Eigen::Vector2d d(fit->A(i, 1), fit->A(i, 2));
+    if (std::abs(d.dot(fit->across_direction)) >= kAcrossCone * d.norm() && fit->values[i] > (1 + kAcrossRise) * fit->values[0])
       return test;
   }
   test.on_crest = true;
   if (!(along < kPeakRatio * across)) {
-    const Eigen::Vector2d t = eigen.eigenvectors().col(1);
-    Eigen::Vector3d direction = (t.x() * u + t.y() * w).normalized();
+    Eigen::Vector3d direction = fit->along_3d();
     Eigen::Index largest = 0;
     direction.cwiseAbs().maxCoeff(&largest);
     if (direction[largest] < 0) direction = -direction;
@@ -268,7 +290,7 @@ std::vector<char> near_creases_or_boundary(const PreparedMesh& mesh, int rings) 
 // The seeds of one sign: candidates strongest first, each taken when it is far enough from the
 // seeds already taken and passes the crest test (fitted only for candidates not suppressed).
 std::vector<FeatureVertexSeed> find_vertex_seeds(const PreparedMesh& mesh, FeatureSign sign, const FeatureSeedOptions& options,
-                                                 const std::vector<char>& excluded, RingScratch& scratch,
+                                                 const std::vector<char>& excluded,
                                                  std::size_t& candidate_count, const Cancellation* cancel) {
   std::vector<FeatureVertexSeed> seeds;
   if (options.max_vertices_per_sign == 0) return seeds;
@@ -298,7 +320,7 @@ std::vector<FeatureVertexSeed> find_vertex_seeds(const PreparedMesh& mesh, Featu
     for (std::size_t j = 0; j < seeds.size() && !suppressed; ++j)
       suppressed = (mesh.positions[v] - mesh.positions[seeds[j].vertex]).norm() < suppression_radius[j];
     if (suppressed) continue;
-    const CrestTest crest = test_crest(mesh, v, s, scratch);
+    const CrestTest crest = test_crest(mesh, v, s);
     if (!crest.on_crest) continue;
     FeatureVertexSeed seed;
     seed.vertex = v;
@@ -339,17 +361,22 @@ FeatureSeeds find_feature_seeds(const PreparedMesh& mesh, const FeatureSeedOptio
   for (auto& chain : chains) chain.dihedral_degrees = length_weighted_dihedral_degrees(mesh, chain);
   seeds.crease_chains = std::move(chains);
 
-  RingScratch scratch;
-  scratch.stamp.assign(mesh.n_vertices(), 0);
   const std::vector<char> excluded = near_creases_or_boundary(mesh, options.crease_clearance);
-  seeds.ridge_vertices = find_vertex_seeds(mesh, FeatureSign::ridge, options, excluded, scratch, stats.ridge_candidates, cancel);
-  seeds.valley_vertices =
-      find_vertex_seeds(mesh, FeatureSign::valley, options, excluded, scratch, stats.valley_candidates, cancel);
+  seeds.ridge_vertices = find_vertex_seeds(mesh, FeatureSign::ridge, options, excluded, stats.ridge_candidates, cancel);
+  seeds.valley_vertices = find_vertex_seeds(mesh, FeatureSign::valley, options, excluded, stats.valley_candidates, cancel);
   const double radius = mesh.curvature.radius > 0 ? mesh.curvature.radius : 1.0;
   stats.noise_floor_strength = 2 * options.min_signal_to_noise * mesh.curvature.noise /
                                (radius * radius * mesh.statistics.mean_edge_length) / mesh.curvature_scale;
   stats.elapsed_ms = lap_ms(clock);
   return seeds;
+}
+
+std::optional<CrestFrame> crest_frame(const PreparedMesh& mesh, std::uint32_t v, FeatureSign sign) {
+  const std::optional<FieldFit> fit = fit_field(mesh, v, crease_sign_value(sign));
+  if (!fit || !(fit->across < fit->along)) return std::nullopt;
+  // The fitted parabola across the crest falls by -across * t^2 / 2 at t = 2 edge lengths.
+  const double value = fit->values[0];
+  return CrestFrame{fit->along_3d(), value > 0 ? -2 * fit->across / value : 0.0};
 }
 
 }  // namespace featureline

@@ -181,7 +181,7 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
                                                              bool feature_weighted, const InitialLineOptions& options,
                                                              double feature_sign,
                                                              const std::vector<std::uint32_t>* blocked,
-                                                             const Cancellation* cancel) {
+                                                             const Cancellation* cancel, double max_cost) {
   const auto& P = mesh.positions;
   const double floor = feature_weighted ? std::clamp(options.feature_weight_floor, 1e-6, 1.0) : 1.0;
   // A*: the cheapest possible cost per unit length is `floor`, so floor * |x - goal| never
@@ -204,7 +204,7 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
     const double strength = on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v + feature_strength(mesh, w, feature_sign));
     return mesh.neighbor_edge_lengths[k] * (floor + (1 - floor) * (1 - strength));
   };
-  auto path = cheapest_edge_path(mesh, from, [to](std::uint32_t v) { return v == to; }, edge_cost, heuristic, HUGE_VAL,
+  auto path = cheapest_edge_path(mesh, from, [to](std::uint32_t v) { return v == to; }, edge_cost, heuristic, max_cost,
                                  cancel);
   if (path.empty()) return std::nullopt;
   return path;

@@ -1,6 +1,7 @@
 // Stage 1: the initial feature line through the key vertices, along mesh edges.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -92,14 +93,16 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
                                                           const std::vector<std::uint32_t>* blocked = nullptr,
                                                           const Cancellation* cancel = nullptr);
 
-/// Minimal edge path from `from` to `to` (A*). `feature_weighted` selects the feature_path cost,
-/// `blocked` (sorted ids) lists vertices to avoid in both searches, ends excepted.
-/// otherwise plain length. Vertices marked in `blocked` are avoided (ends excepted).
+/// Minimal edge path from `from` to `to` (A*): `feature_weighted` selects the feature_path cost,
+/// otherwise plain length. Vertices in `blocked` (sorted ids) are avoided, ends excepted. Paths
+/// costing more than `max_cost` are not searched (std::nullopt), which keeps a search for a
+/// nearby vertex local when blocked vertices wall it off.
 std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
                                                              bool feature_weighted, const InitialLineOptions& options,
                                                              double feature_sign = 0,
                                                              const std::vector<std::uint32_t>* blocked = nullptr,
-                                                             const Cancellation* cancel = nullptr);
+                                                             const Cancellation* cancel = nullptr,
+                                                             double max_cost = HUGE_VAL);
 
 /// Feature strength in [0, 1] of vertex v: its feature value for lines of `feature_sign`
 /// (engine/curvature.h) over the mesh's curvature scale, clamped.

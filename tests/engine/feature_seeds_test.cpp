@@ -26,43 +26,6 @@ namespace {
 
 using namespace featureline::testing;
 
-// The unit cube [0,1]^3 with each face an n x n grid of quads (split along one diagonal),
-// outward oriented. Each cube edge is a run of n mesh edges between two corners.
-RawMesh subdivided_cube(int n) {
-  RawMesh mesh;
-  std::map<std::array<int, 3>, std::uint32_t> ids;
-  auto id = [&](std::array<int, 3> p) {
-    const auto [it, inserted] = ids.emplace(p, std::uint32_t(mesh.positions.size()));
-    if (inserted) mesh.positions.push_back({double(p[0]) / n, double(p[1]) / n, double(p[2]) / n});
-    return it->second;
-  };
-  for (int axis = 0; axis < 3; ++axis)
-    for (int side = 0; side < 2; ++side) {
-      // u x v = +axis; the face at side 0 faces -axis, so its quads run v, u instead.
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-          auto corner = [&](int di, int dj) {
-            std::array<int, 3> p{};
-            p[axis] = side * n;
-            p[u] = i + di;
-            p[v] = j + dj;
-            return id(p);
-          };
-          const auto a = corner(0, 0), b = corner(1, 0), c = corner(1, 1), d = corner(0, 1);
-          if (side == 1) {
-            mesh.triangles.push_back({a, b, c});
-            mesh.triangles.push_back({a, c, d});
-          } else {
-            mesh.triangles.push_back({a, c, b});
-            mesh.triangles.push_back({a, d, c});
-          }
-        }
-    }
-  mesh.source_faces = mesh.triangles.size();
-  return mesh;
-}
-
 // The crease flag of edge a -> b in the prepared mesh (0 when not an edge).
 int crease_of(const PreparedMesh& mesh, std::uint32_t a, std::uint32_t b) {
   for (auto k = mesh.neighbor_offsets[a]; k < mesh.neighbor_offsets[a + 1]; ++k)
@@ -137,7 +100,7 @@ void expect_chains_follow_creases(const PreparedMesh& mesh, const FeatureSeeds& 
 
 TEST(FeatureSeeds, CubeHasTwelveEdgeChainsMeetingAtEightCorners) {
   const int n = 6;
-  const auto mesh = prepare_mesh(subdivided_cube(n));
+  const auto mesh = prepare_mesh(make_subdivided_cube(n));
   ASSERT_EQ(mesh->curvature.crease_edges, std::size_t(12 * n));
   const FeatureSeeds seeds = find_feature_seeds(*mesh);
   ASSERT_EQ(seeds.crease_chains.size(), 12u);
@@ -357,7 +320,7 @@ TEST(FeatureSeeds, SameAnswerEveryRunAndUnderScaling) {
 }
 
 TEST(FeatureSeeds, OptionsOutOfRangeAreRefused) {
-  const auto mesh = prepare_mesh(subdivided_cube(2));
+  const auto mesh = prepare_mesh(make_subdivided_cube(2));
   auto refused = [&](auto change) {
     FeatureSeedOptions o;
     change(o);
@@ -412,7 +375,7 @@ void expect_finite_numbers(const nlohmann::json& j, const std::string& where) {
 }
 
 TEST(FeatureSeeds, JsonHasTheDocumentedShapeAndFiniteNumbers) {
-  for (const RawMesh& raw : {subdivided_cube(4), make_ridge_field(41, 0.2, 3, 0.3, 0.25, 0.3).mesh}) {
+  for (const RawMesh& raw : {make_subdivided_cube(4), make_ridge_field(41, 0.2, 3, 0.3, 0.25, 0.3).mesh}) {
     const auto mesh = prepare_mesh(raw);
     const FeatureSeeds seeds = find_feature_seeds(*mesh);
     const nlohmann::json j = feature_seeds_to_json(*mesh, seeds);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -375,6 +376,42 @@ double distance_to_crest(const HeightField& field, double x, double y) {
   }
   best_value = std::min({best_value, fc, fd, squared((a + b) / 2)});
   return std::sqrt(best_value);
+}
+
+RawMesh make_subdivided_cube(int n) {
+  require(n >= 1, "make_subdivided_cube", "n must be at least 1");
+  RawMesh mesh;
+  std::map<std::array<int, 3>, std::uint32_t> ids;
+  auto id = [&](std::array<int, 3> p) {
+    const auto [it, inserted] = ids.emplace(p, std::uint32_t(mesh.positions.size()));
+    if (inserted) mesh.positions.push_back({double(p[0]) / n, double(p[1]) / n, double(p[2]) / n});
+    return it->second;
+  };
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      // u x v = +axis; the face at side 0 faces -axis, so its quads run v, u instead.
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          auto corner = [&](int di, int dj) {
+            std::array<int, 3> p{};
+            p[axis] = side * n;
+            p[u] = i + di;
+            p[v] = j + dj;
+            return id(p);
+          };
+          const auto a = corner(0, 0), b = corner(1, 0), c = corner(1, 1), d = corner(0, 1);
+          if (side == 1) {
+            mesh.triangles.push_back({a, b, c});
+            mesh.triangles.push_back({a, c, d});
+          } else {
+            mesh.triangles.push_back({a, c, b});
+            mesh.triangles.push_back({a, d, c});
+          }
+        }
+    }
+  mesh.source_faces = mesh.triangles.size();
+  return mesh;
 }
 
 RawMesh make_plane_grid(int n, double jitter, std::uint64_t seed) {

@@ -24,6 +24,12 @@ namespace featureline::testing {
 // Closed surfaces
 // ---------------------------------------------------------------------------------
 
+/// The unit cube [0,1]^3 with each face an n x n grid of quads (split along one diagonal),
+/// outward oriented. Each cube edge is a run of n mesh edges between two corners, where three
+/// 90-degree creases meet.
+/// \param n  quads per face side, >= 1
+RawMesh make_subdivided_cube(int n);
+
 /// Icosahedron centred at the origin, each face split into 4 `subdivisions` times,
 /// with every vertex projected onto the sphere. Closed, genus 0, outward oriented;
 /// nearly uniform triangles, so the mean curvature is 1/radius everywhere.
