@@ -475,8 +475,9 @@ struct FeaturelineServer::Impl {
     }));
     // The page: a folder given with --web-root, else the copy compiled into the binary.
     if (!options.web_root.empty()) {
-      if (!http.set_mount_point("/", options.web_root))
+      if (!http.set_mount_point("/", options.web_root, {{"Cache-Control", kWebCacheControl}}))
         throw std::runtime_error("cannot serve the web page folder " + options.web_root);
+      http.set_file_request_handler([](const auto& req, auto& res) { revalidate_folder_file(req, res); });
     } else if (options.embedded_page) {
       http.Get("/(.*)", guarded("/{page}", [](const auto& req, auto& res) { serve_embedded_page(req, res); }));
     }
@@ -487,12 +488,22 @@ struct FeaturelineServer::Impl {
     if (asset == nullptr) throw HttpError(404, "not_found", "nothing at " + quote_client_text(req.path));
     res.set_header("ETag", std::string(asset->etag));
     // Revalidated on every load (the next build of the page must show at once); 304 when unchanged.
-    res.set_header("Cache-Control", "no-cache");
-    if (req.get_header_value("If-None-Match") == asset->etag) {
+    res.set_header("Cache-Control", kWebCacheControl);
+    if (etag_matches(req.get_header_value("If-None-Match"), asset->etag)) {
       res.status = 304;
       return;
     }
     res.set_content(asset->bytes.data(), asset->bytes.size(), web_content_type(asset->path));
+  }
+
+  // A file of the --web-root folder, read by httplib: its ETag, and 304 without the body when
+  // the browser already has these bytes.
+  static void revalidate_folder_file(const httplib::Request& req, httplib::Response& res) {
+    const std::string etag = content_etag(res.body);
+    res.set_header("ETag", etag);
+    if (!etag_matches(req.get_header_value("If-None-Match"), etag)) return;
+    res.status = 304;
+    res.body.clear();
   }
 
   // ---- handlers ----------------------------------------------------------------------------

@@ -1,8 +1,8 @@
 #!/usr/bin/env node
 // The page's modules that need no browser, with known answers: 1-based numbering of server
 // text, the undo history, session files, vertex rings, snapping, sharp edges and the CAD and
-// up-axis guesses on real meshes from ../shared/data/meshes, and grid picking against testing
-// every triangle.
+// up-axis guesses on real meshes from ../shared/data/meshes, grid picking against testing
+// every triangle, typed vertex ids, and the page's line names put into the server's files.
 //   node --test tests/web/modules_test.mjs
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
@@ -11,9 +11,10 @@ import test from 'node:test';
 import { fileURLToPath } from 'node:url';
 import { guessUpAxis, looksLikeCad, ringNeighbourhood, sharpEdges, strongestFeatureVertex, vertexAdjacency } from '../../web/src/geometry.js';
 import { History } from '../../web/src/history.js';
+import { nameGlbLines, nameObjLines, namePlyLines, objName } from '../../web/src/line_files.js';
 import { buildTriangleGrid, raycastAll, raycastGrid } from '../../web/src/raycast.js';
 import { parseSession, sessionDocument } from '../../web/src/session.js';
-import { oneBasedNumbers } from '../../web/src/text.js';
+import { oneBasedNumbers, vertexIdProblem } from '../../web/src/text.js';
 
 const repo = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
 function sharedMesh(name) {
@@ -180,4 +181,76 @@ test('grid picking on a flat square: the known triangle and point, a miss beside
   assert.equal(raycastGrid(grid, [0.25, 0.75, -2], [0, 0, 1]).face, 1, 'seen from below too (double-sided)');
   assert.equal(raycastGrid(grid, [1.5, 0.5, 5], [0, 0, -1]), null);
   assert.equal(raycastGrid(grid, [0.5, 0.5, 5], [0, 0, 1]), null, 'pointing away');
+});
+
+test('typed vertex ids: whole numbers in range, not the last key again', () => {
+  const line = { name: 'Line 1', keys: [4, 7] };
+  assert.equal(vertexIdProblem('12', 100, line), '');
+  assert.equal(vertexIdProblem(' 0 ', 100, line), '');
+  assert.equal(vertexIdProblem('100', 100, line), 'vertex 100 is out of range: this mesh has vertices 0 to 99');
+  assert.equal(vertexIdProblem('-1', 100, line), '"-1" is not a vertex id: type a whole number from 0 to 99');
+  assert.equal(vertexIdProblem('2.5', 100, line), '"2.5" is not a vertex id: type a whole number from 0 to 99');
+  assert.equal(vertexIdProblem('', 100, line), '"" is not a vertex id: type a whole number from 0 to 99');
+  assert.equal(vertexIdProblem('7', 100, line), 'vertex 7 is already the last key of Line 1');
+});
+
+// The server's files as api/export_formats.cpp writes them for two lines (the second closed).
+const SERVER_OBJ = '# Featureline: 2 feature lines\no line_0\nv 0 0 0\nv 1 0 0\nl 1 2\no line_1\nv 0 1 0\nv 1 1 0\nv 1 2 0\nl 3 4 5 3\n';
+const SERVER_PLY = [
+  'ply', 'format ascii 1.0', 'comment Featureline: 2 feature lines', 'element vertex 5',
+  'property double x', 'property double y', 'property double z', 'element edge 4',
+  'property int vertex1', 'property int vertex2', 'property int line', 'end_header',
+  '0 0 0', '1 0 0', '0 1 0', '1 1 0', '1 2 0', '0 1 0', '2 3 1', '3 4 1', '4 2 1', '',
+].join('\n');
+
+test('OBJ and PLY line files get the page\'s names and 1-based line numbers, nothing else changes', () => {
+  assert.equal(objName('rim edge '), 'rim_edge');
+  assert.equal(objName('  '), 'line');
+  assert.equal(nameObjLines(SERVER_OBJ, ['rim edge', 'Line 2']), SERVER_OBJ.replace('o line_0\n', 'o rim_edge\n').replace('o line_1\n', 'o Line_2\n'));
+  const ply = namePlyLines(SERVER_PLY, ['rim edge', 'Line 2']).split('\n');
+  assert.deepEqual(ply.slice(0, 7), ['ply', 'format ascii 1.0', 'comment Featureline: 2 feature lines',
+    'comment the edges\' "line" counts from 1, as the page does:', 'comment line 1: rim edge', 'comment line 2: Line 2', 'element vertex 5']);
+  assert.deepEqual(ply.slice(-10), ['0 0 0', '1 0 0', '0 1 0', '1 1 0', '1 2 0', '0 1 1', '2 3 2', '3 4 2', '4 2 2', '']);
+});
+
+// A GLB of two line nodes and a binary chunk, as the server lays it out (JSON chunk padded
+// with spaces to 4 bytes, then the BIN chunk).
+function glbOf(json, bin) {
+  const text = Buffer.from(JSON.stringify(json));
+  const padded = Buffer.concat([text, Buffer.alloc((4 - (text.length % 4)) % 4, 0x20)]);
+  const header = Buffer.alloc(20);
+  header.writeUInt32LE(0x46546c67, 0);
+  header.writeUInt32LE(2, 4);
+  header.writeUInt32LE(20 + padded.length + 8 + bin.length, 8);
+  header.writeUInt32LE(padded.length, 12);
+  header.writeUInt32LE(0x4e4f534a, 16);
+  const binHeader = Buffer.alloc(8);
+  binHeader.writeUInt32LE(bin.length, 0);
+  binHeader.writeUInt32LE(0x004e4942, 4);
+  const all = Buffer.concat([header, padded, binHeader, bin]);
+  return all.buffer.slice(all.byteOffset, all.byteOffset + all.length);
+}
+
+test('GLB line files: nodes and meshes renamed, the binary chunk byte for byte', () => {
+  const json = { asset: { version: '2.0' }, nodes: [{ name: 'feature_line_0', mesh: 0 }, { name: 'feature_line_1', mesh: 1 }, { name: 'surface' }], meshes: [{ name: 'feature_line_0' }, { name: 'feature_line_1' }] };
+  const bin = Buffer.from([1, 2, 3, 4, 5, 6, 7, 8]);
+  const out = Buffer.from(nameGlbLines(glbOf(json, bin), ['rim édge', 'Line 2']));
+  assert.equal(out.readUInt32LE(0), 0x46546c67);
+  assert.equal(out.readUInt32LE(8), out.length);
+  const jsonLength = out.readUInt32LE(12);
+  assert.equal(jsonLength % 4, 0);
+  const renamed = JSON.parse(out.subarray(20, 20 + jsonLength).toString('utf8'));
+  assert.deepEqual(renamed.nodes.map((n) => n.name), ['rim édge', 'Line 2', 'surface']);
+  assert.deepEqual(renamed.meshes.map((m) => m.name), ['rim édge', 'Line 2']);
+  assert.deepEqual(out.subarray(20 + jsonLength), Buffer.concat([Buffer.from([8, 0, 0, 0, 0x42, 0x49, 0x4e, 0]), bin]));
+});
+
+test('a session keeps the view; a malformed view is refused', () => {
+  const mesh = { name: 'm.off', id: 'x', vertexCount: 3, faceCount: 1 };
+  const view = { position: [1, 2, 3], target: [0, 0, 0], orthographic: true, zoom: 2 };
+  const doc = parseSession(JSON.stringify(sessionDocument({ mesh, lines: [], options: {}, upAxis: 'y', view })));
+  assert.deepEqual(doc.view, view);
+  const bad = (v) => JSON.stringify({ ...sessionDocument({ mesh, lines: [], options: {}, upAxis: 'y' }), view: v });
+  assert.throws(() => parseSession(bad({ ...view, position: [1, 2] })), /"view" needs a "position" and a "target"/);
+  assert.throws(() => parseSession(bad({ ...view, zoom: 0 })), /positive "zoom"/);
 });

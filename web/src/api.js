@@ -201,8 +201,10 @@ export async function detectFeatureLines(meshId, body, { signal } = {}) {
   return (await postJson(`/v1/meshes/${meshId}/feature-lines`, body, { signal })).json();
 }
 
-export async function featureLinesGlb(meshId, body) {
-  return (await postJson(`/v1/meshes/${meshId}/feature-lines?format=glb`, body, { accept: 'model/gltf-binary' })).blob();
+// The lines as a file the server writes: ?format=glb, obj, ply or polylines (api/openapi.yaml).
+// Resolves to the Response (the caller reads it as bytes or text).
+export function featureLinesFile(meshId, body, format) {
+  return postJson(`/v1/meshes/${meshId}/feature-lines?format=${encodeURIComponent(format)}`, body, { accept: '*/*' });
 }
 
 // POST /v1/meshes/{id}/segmentation {"lines": [LineRequest or ComputedLine...], "mode"} ->

@@ -21,6 +21,7 @@ export function onKeyDown(e) {
   if (e.key === 'Escape') {
     if (confirmResolver) return confirmResolver(false);
     if (!$('help').hidden) return toggleHelp(false);
+    if (drawerOpen()) return toggleDrawer(false);
     if (pointer.drag) {
       // Cancel the drag: put the key back.
       restore(pointer.drag.before);
@@ -60,6 +61,11 @@ export function onKeyDown(e) {
     c: () => setClosed(!activeLine()?.closed),
     s: () => setSnapping(!state.snapping),
     f: () => viewer.fitView(),
+    1: () => lookFrom('front'),
+    2: () => lookFrom('top'),
+    3: () => lookFrom('side'),
+    o: () => setOrthographic(!viewer.orthographic),
+    p: () => toggleDrawer(),
     e: () => toggleEdges(),
     '?': () => toggleHelp(),
     h: () => toggleHelp(),
@@ -80,4 +86,30 @@ export function setSnapping(on) {
 export function toggleEdges(on = !viewer.edgesShown) {
   viewer.showEdges(on);
   $('edges-toggle').checked = on;
+}
+
+const VIEW_NAMES = { front: 'the front', top: 'above', side: 'the right side' };
+
+export function lookFrom(name) {
+  if (!state.mesh) return showMessage('Open a mesh first.', { error: true });
+  if (viewer.viewFrom(name)) showMessage(`Looking from ${VIEW_NAMES[name]} (${state.upAxis === 'z' ? '+Z' : '+Y'} up); F frames the mesh as it opened.`);
+}
+
+export function setOrthographic(on) {
+  viewer.setOrthographic(on);
+  $('ortho-toggle').checked = on;
+  showMessage(on ? 'Orthographic projection: sizes no longer shrink with distance (O switches back).' : 'Perspective projection (O switches to orthographic).');
+}
+
+// Narrow windows show the panel as a drawer over the view (the width is style.css's).
+const NARROW = '(max-width: 899px)';
+export function drawerOpen() {
+  return document.body.classList.contains('drawer-open') && window.matchMedia(NARROW).matches;
+}
+
+export function toggleDrawer(open = !drawerOpen()) {
+  document.body.classList.toggle('drawer-open', open);
+  $('panel-toggle').setAttribute('aria-expanded', String(open));
+  if (open) $('panel').querySelector('#toolbar button')?.focus();
+  else if (document.activeElement && $('panel').contains(document.activeElement)) $('panel-toggle').focus();
 }

@@ -4,8 +4,10 @@ import * as api from './api.js';
 import { $, history, num, resultCache, serverText, showMessage, state } from './app.js';
 import { recoverMesh } from './open_mesh.js';
 import { writeOptionsForm } from './options_panel.js';
+import { vertexIdProblem } from './text.js';
 import { refresh } from './panel.js';
 
+const MAX_LINE_NAME = 80;
 // Answers kept for undo and redo (by request).
 const RESULT_CACHE_SIZE = 300;
 export let idleWaiters = [];
@@ -107,10 +109,25 @@ export function addLineUnrecorded() {
 }
 
 export function addLine() {
+  // Lines belong to a mesh: without one there is nothing to add (and nothing to undo).
+  if (!state.mesh) return showMessage('Open a mesh first: lines are drawn on a mesh.', { error: true });
   edit('new line', () => {
     addLineUnrecorded();
   });
   showMessage(`${activeLine().name} is active: click the surface to place its keys.`);
+}
+
+// Names are the user's: any text, trimmed; an empty name keeps the old one.
+export function renameLine(id, name) {
+  const line = state.lines.find((l) => l.id === id);
+  const wanted = String(name ?? '').trim().slice(0, MAX_LINE_NAME);
+  if (!line || !wanted || wanted === line.name) return false;
+  const old = line.name;
+  edit(`rename ${old} to ${wanted}`, () => {
+    line.name = wanted;
+  });
+  showMessage(`Renamed ${old} to ${wanted}.`);
+  return true;
 }
 
 export function deleteLine(id) {
@@ -157,6 +174,18 @@ export function addKey(vertex) {
   return added;
 }
 
+// Adds a key at a typed vertex id; returns the error text ('' when added).
+export function addKeyById(text) {
+  if (!state.mesh) return 'open a mesh first';
+  const line = activeLine();
+  const problem = vertexIdProblem(text, state.mesh.vertexCount, line);
+  if (problem) return problem;
+  const vertex = Number(String(text).trim());
+  addKey(vertex);
+  showMessage(`Key ${line.keys.length} of ${line.name}: vertex ${vertex} (typed).`);
+  return '';
+}
+
 export function moveKeyUnrecorded(line, index, vertex) {
   if (line.keys[index] === vertex || !canUseVertex(line, index, vertex)) return false;
   line.keys[index] = vertex;
@@ -165,10 +194,12 @@ export function moveKeyUnrecorded(line, index, vertex) {
 }
 
 export function deleteKey(line, index) {
+  const vertex = line.keys[index];
   edit(`delete key ${index + 1} of ${line.name}`, () => {
     line.keys.splice(index, 1);
     state.selectedKey = null;
   });
+  showMessage(`Deleted key ${index + 1} of ${line.name} (vertex ${vertex}). Undo brings it back (Ctrl+Z).`);
 }
 
 export function deleteSelectedKey() {
@@ -182,10 +213,13 @@ export function deleteSelectedKey() {
 
 export function setClosed(closed) {
   const line = activeLine();
-  if (!line || line.closed === closed) return;
+  if (!line) return showMessage('Open a mesh first: there is no line to close.', { error: true });
+  if (line.closed === closed) return;
   edit(closed ? `close ${line.name}` : `open ${line.name}`, () => {
     line.closed = closed;
   });
+  const few = closed && line.keys.length < 3 ? ` (a loop needs at least 3 keys; it has ${line.keys.length})` : '';
+  showMessage(closed ? `Closed ${line.name} into a loop: its last key joins the first${few}.` : `Opened ${line.name}'s loop: its ends are free again.`);
 }
 
 export function clearKeys() {

@@ -1,11 +1,12 @@
 // The Featureline page: open a mesh, place keys, see the initial and refined lines,
 // tune options, decompose the mesh along the lines, download the results; undo and redo every
 // edit, save and load the work as a session file.
+import * as THREE from 'three';
 import { $, history, showMessage, state, viewer } from './app.js';
 import { divergingCss } from './colors.js';
 import { ringNeighbourhood } from './geometry.js';
-import { onKeyDown, setSnapping, toggleEdges, toggleHelp } from './keyboard.js';
-import { addLine, clearKeys, idleWaiters, isStale, redo, setClosed, settleIdle, undo } from './lines.js';
+import { lookFrom, onKeyDown, setOrthographic, setSnapping, toggleDrawer, toggleEdges, toggleHelp } from './keyboard.js';
+import { addKeyById, addLine, clearKeys, idleWaiters, isStale, redo, setClosed, settleIdle, undo } from './lines.js';
 import { downloadLines, downloadSegmented, loadSamples, loadSessionFile, openFiles, openSample, renderMeshInfo, saveSession } from './open_mesh.js';
 import { loadOptionTables, optionsChanged } from './options_panel.js';
 import { applyColors, refresh, setUpAxis } from './panel.js';
@@ -79,6 +80,15 @@ function wire() {
   $('edges-toggle').addEventListener('change', (e) => toggleEdges(e.target.checked));
   $('snap-toggle').addEventListener('change', (e) => setSnapping(e.target.checked));
   $('reset-view').addEventListener('click', () => viewer.fitView());
+  for (const name of ['front', 'top', 'side']) $(`view-${name}`).addEventListener('click', () => lookFrom(name));
+  $('ortho-toggle').addEventListener('change', (e) => setOrthographic(e.target.checked));
+  $('panel-toggle').addEventListener('click', () => toggleDrawer());
+  $('panel-close').addEventListener('click', () => toggleDrawer(false));
+  $('key-by-id').addEventListener('submit', (e) => {
+    e.preventDefault();
+    showKeyIdError(addKeyById($('key-vertex').value));
+  });
+  $('key-vertex').addEventListener('input', () => showKeyIdError(''));
   $('add-line').addEventListener('click', addLine);
   $('toolbar-add-line').addEventListener('click', addLine);
   $('clear-keys').addEventListener('click', clearKeys);
@@ -95,11 +105,19 @@ function wire() {
   $('decompose').addEventListener('click', decompose);
   $('toolbar-decompose').addEventListener('click', decompose);
   $('download-json').addEventListener('click', () => downloadLines('json'));
-  $('download-glb').addEventListener('click', () => downloadLines('glb'));
+  for (const format of ['glb', 'obj', 'ply', 'polylines']) $(`download-${format}`).addEventListener('click', () => downloadLines(format));
   $('download-segmented').addEventListener('click', downloadSegmented);
   document.querySelector('#legend .legend-bar').style.background = divergingCss();
   // Small windows start with the long sections folded, so the lines stay in view.
   if (window.innerHeight < 800) $('options-section').open = false;
+}
+
+function showKeyIdError(text) {
+  $('key-vertex-error').textContent = text ? `${text[0].toUpperCase()}${text.slice(1)}.` : '';
+  $('key-vertex-error').hidden = !text;
+  $('key-vertex').setAttribute('aria-invalid', String(!!text));
+  if (!text) return;
+  $('key-vertex').focus();
 }
 
 // ---- for tests (and the curious): the app's state, read-only copies ------------------------------------
@@ -206,6 +224,21 @@ window.featureline = {
   },
   threeRaycastAt: (x, y) => viewer.pickFaceWithThree(x, y),
   extremeVertex: (axis, largest) => viewer.extremeVertex(axis, largest),
+  // The mesh's bounding sphere ({center, radius}), and where points land in client pixels.
+  boundingSphere() {
+    const sphere = viewer.displayMesh?.geometry.boundingSphere;
+    return sphere ? { center: sphere.center.toArray(), radius: sphere.radius } : null;
+  },
+  toClient(points) {
+    viewer.render();
+    return points.map((p) => {
+      const c = viewer.toClient(new THREE.Vector3(...p));
+      return { x: c.x, y: c.y };
+    });
+  },
+  get view() {
+    return viewer.viewState();
+  },
   sceneStats: () => viewer.sceneStats(),
   probe: () => viewer.probe(),
 };

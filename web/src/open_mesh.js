@@ -5,7 +5,8 @@ import * as api from './api.js';
 import { $, confirmAction, errorText, formatBytes, hasWork, history, num, resultCache, serverText, showMessage, state, viewer } from './app.js';
 import { curvatureRange } from './colors.js';
 import { guessUpAxis, looksLikeCad, sharpEdges, vertexAdjacency } from './geometry.js';
-import { addLineUnrecorded, edit, pump, retryNotice } from './lines.js';
+import { LINE_FILE_FORMATS, nameLinesInFile } from './line_files.js';
+import { addLineUnrecorded, edit, keysProblem, pump, retryNotice } from './lines.js';
 import { writeOptionsForm } from './options_panel.js';
 import { applyColors, refresh, renderUpAxis, setUpAxis } from './panel.js';
 import { clearSegmentation, readyLines, segmentedObject } from './segmentation_panel.js';
@@ -270,8 +271,8 @@ export async function downloadLines(format) {
   const lines = readyLines();
   if (!lines.length) return showMessage('No line to download: place at least two keys.', { error: true });
   try {
-    if (format === 'glb') {
-      saveBlob(await api.withRetry(() => api.featureLinesGlb(state.mesh.id, { lines })), `${baseName()}-lines.glb`);
+    if (LINE_FILE_FORMATS[format]) {
+      await downloadLineFile(format, lines);
     } else {
       const answer = await api.withRetry(() => api.detectFeatureLines(state.mesh.id, { lines }));
       // The session fields make the file loadable again (Load session).
@@ -279,11 +280,20 @@ export async function downloadLines(format) {
       doc.session_lines = sessionDocument(currentSessionParts()).lines;
       saveBlob(new Blob([JSON.stringify(doc, null, 2)], { type: 'application/json' }), `${baseName()}-lines.json`);
     }
-    showMessage(`Downloaded ${lines.length} line(s) as ${format.toUpperCase()}.`);
+    showMessage(`Downloaded ${lines.length} line(s) as ${format === 'polylines' ? 'CGAL polylines' : format.toUpperCase()}${format === 'json' || format === 'polylines' ? '' : ', named as here'}.`);
   } catch (e) {
     if (e instanceof api.ApiError && e.isMeshGone) return recoverMesh(e.message);
     showMessage(`Download failed: ${serverText(e)}`, { error: true });
   }
+}
+
+// A file the server writes, with the page's line names put in (line_files.js).
+async function downloadLineFile(format, lines) {
+  const { extension, type, binary } = LINE_FILE_FORMATS[format];
+  const names = state.lines.filter((l) => !keysProblem(l)).map((l) => l.name);
+  const response = await api.withRetry(() => api.featureLinesFile(state.mesh.id, { lines }, format));
+  const content = binary ? await response.arrayBuffer() : await response.text();
+  saveBlob(new Blob([nameLinesInFile(format, content, names)], { type }), `${baseName()}-lines${extension}`);
 }
 
 // Saves the decomposition the page already has as GLB (one mesh per part, the answer's
@@ -307,7 +317,7 @@ export async function downloadSegmented() {
 }
 
 export function currentSessionParts() {
-  return { mesh: state.mesh, lines: state.lines, options: state.options, upAxis: state.upAxis };
+  return { mesh: state.mesh, lines: state.lines, options: state.options, upAxis: state.upAxis, view: state.mesh ? viewer.viewState() : null };
 }
 
 export function saveSession() {
@@ -391,5 +401,9 @@ export function applySession(doc) {
     state.selectedKey = null;
   });
   if (doc.up_axis === 'y' || doc.up_axis === 'z') setUpAxis(doc.up_axis);
+  if (doc.view) {
+    viewer.setViewState(doc.view);
+    $('ortho-toggle').checked = viewer.orthographic;
+  }
   showMessage(`Loaded the session: ${doc.lines.length} line(s) on ${state.mesh.name}.`);
 }

@@ -1,7 +1,7 @@
 // Rendering the panel from the state (lines, keys, status, timings) and the mesh colours.
 import { $, num, serverText, state, viewer } from './app.js';
 import { diverging } from './colors.js';
-import { activeLine, deleteKey, deleteLine, isStale, keysProblem, renderHistoryButtons, requestKey, setActiveLine, undo } from './lines.js';
+import { activeLine, deleteKey, deleteLine, isStale, keysProblem, renameLine, renderHistoryButtons, requestKey, setActiveLine } from './lines.js';
 import { renderSegmentStaleness, segmentColor } from './segmentation_panel.js';
 import { rememberUpAxis } from './session.js';
 
@@ -69,9 +69,15 @@ export function lineStateText(line) {
   return { text: `${line.keys.length} keys · length ${num(line.result.refined.length, 3)}` };
 }
 
+// Set while the list is rebuilt: the rename field it removes loses focus, which is no answer.
+let drawingLineList = false;
+
 export function renderLineList() {
   const ul = $('line-list');
+  const renameFocused = document.activeElement?.classList.contains('rename');
+  drawingLineList = true;
   ul.innerHTML = '';
+  drawingLineList = false;
   for (const line of state.lines) {
     const li = document.createElement('li');
     li.classList.toggle('active', line.id === state.activeLineId);
@@ -79,9 +85,7 @@ export function renderLineList() {
     li.dataset.lineId = line.id;
     li.tabIndex = 0;
     li.title = 'Make this the active line (new keys go to it)';
-    const name = document.createElement('span');
-    name.className = 'name';
-    name.textContent = `${line.name}${line.closed ? ' (loop)' : ''}`;
+    const name = state.renaming?.lineId === line.id ? renameField(line) : nameLabel(line);
     const st = document.createElement('span');
     st.className = 'state';
     const { text, error } = lineStateText(line);
@@ -97,15 +101,73 @@ export function renderLineList() {
       e.stopPropagation();
       deleteLine(line.id);
     });
-    li.append(name, st, del);
+    const rename = document.createElement('button');
+    rename.className = 'rename-line';
+    rename.type = 'button';
+    rename.title = `Rename ${line.name} (or double-click its name)`;
+    rename.setAttribute('aria-label', `rename ${line.name}`);
+    rename.textContent = '✎';
+    rename.addEventListener('click', (e) => {
+      e.stopPropagation();
+      startRenaming(line);
+    });
+    li.append(name, st, rename, del);
     li.addEventListener('click', () => setActiveLine(line.id));
     li.addEventListener('keydown', (e) => {
       if (e.key === 'Enter' || e.key === ' ') setActiveLine(line.id);
     });
     ul.appendChild(li);
   }
+  if (renameFocused) ul.querySelector('input.rename')?.focus();
   const line = activeLine();
   $('closed-toggle').checked = !!line?.closed;
+}
+
+function nameLabel(line) {
+  const name = document.createElement('span');
+  name.className = 'name';
+  name.textContent = `${line.name}${line.closed ? ' (loop)' : ''}`;
+  name.addEventListener('dblclick', (e) => {
+    e.stopPropagation();
+    startRenaming(line);
+  });
+  return name;
+}
+
+// Renaming in place: the typed text survives the list being drawn again (answers arriving);
+// Enter or leaving the field keeps it, Esc drops it.
+export function startRenaming(line) {
+  state.renaming = { lineId: line.id, draft: line.name };
+  renderLineList();
+  const field = document.querySelector('#line-list input.rename');
+  field?.focus();
+  field?.select();
+}
+
+function finishRenaming(keep) {
+  const renaming = state.renaming;
+  if (!renaming) return;
+  state.renaming = null;
+  if (!keep || !renameLine(renaming.lineId, renaming.draft)) renderLineList();
+}
+
+function renameField(line) {
+  const field = document.createElement('input');
+  field.className = 'rename';
+  field.value = state.renaming.draft;
+  field.setAttribute('aria-label', `new name for ${line.name}`);
+  field.maxLength = 80;
+  field.addEventListener('input', () => (state.renaming.draft = field.value));
+  field.addEventListener('click', (e) => e.stopPropagation());
+  field.addEventListener('keydown', (e) => {
+    e.stopPropagation(); // typing a name is not a shortcut
+    if (e.key === 'Enter') finishRenaming(true);
+    if (e.key === 'Escape') finishRenaming(false);
+  });
+  field.addEventListener('blur', () => {
+    if (!drawingLineList) finishRenaming(true);
+  });
+  return field;
 }
 
 export function renderKeyList() {

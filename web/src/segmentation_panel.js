@@ -1,7 +1,7 @@
 // Decomposition along the lines: one request, the segmented surface drawn from the answer, the
 // segments table, and marking it out of date when the lines change.
 import * as api from './api.js';
-import { $, errorText, num, serverText, state, viewer } from './app.js';
+import { $, errorText, num, serverText, showMessage, state, viewer } from './app.js';
 import { rgbCss } from './colors.js';
 import { isStale, keysProblem, lineRequest, retryNotice } from './lines.js';
 import { applyColors } from './panel.js';
@@ -47,12 +47,14 @@ export async function decompose() {
   status.classList.remove('error');
   if (!lines.length) {
     status.textContent = 'Place a line with at least two keys first.';
+    showMessage(`Decompose: ${status.textContent}`, { error: true });
     return;
   }
   // Slivers left where a line doubles back to a pinned key join their neighbour.
   const request = { lines, mode: $('decompose-mode').value, merge_tiny_segments: true };
   const meshId = state.mesh.id;
   status.textContent = 'Decomposing…';
+  showMessage(`Decomposing along ${lines.length} line(s)…`);
   $('decompose').disabled = true;
   $('toolbar-decompose').disabled = true;
   try {
@@ -74,6 +76,7 @@ export async function decompose() {
     state.decomposeMessage = text;
     status.textContent = text;
     status.classList.add('error');
+    showMessage(text, { error: true });
   } finally {
     $('decompose').disabled = false;
     $('toolbar-decompose').disabled = false;
@@ -117,6 +120,8 @@ export async function applySegmentation(request, answer, linesKey) {
   if (answer.warnings?.length) parts.push(...answer.warnings.map((w) => `warning: ${serverText(w)}`));
   state.decomposeMessage = parts.join('\n');
   $('decompose-status').textContent = state.decomposeMessage;
+  // The panel's copy may be scrolled out of view; the status line is always in view.
+  showMessage(`Decomposed into ${parts.join('\n')}`);
   $('segments-toggle').disabled = !(faceColored || seg.sceneLoaded);
   $('segments-toggle').checked = faceColored || seg.sceneLoaded;
   if ($('segments-toggle').checked) $('curvature-toggle').checked = false;

@@ -1,12 +1,12 @@
 // The page's work as a file: the mesh it was made on (name, server id, sizes), the lines
 // (keys are the server's vertex ids, stable for the same file), the options and the view's up
-// axis. Loading one re-creates the lines, uploading the mesh again when the server has
+// axis and camera. Loading one re-creates the lines, uploading the mesh again when the server has
 // forgotten it.
 export const SESSION_FORMAT = 'featureline-session';
 export const SESSION_VERSION = 1;
 
-export function sessionDocument({ mesh, lines, options, upAxis }) {
-  return {
+export function sessionDocument({ mesh, lines, options, upAxis, view }) {
+  const doc = {
     format: SESSION_FORMAT,
     version: SESSION_VERSION,
     saved: new Date().toISOString(),
@@ -15,6 +15,16 @@ export function sessionDocument({ mesh, lines, options, upAxis }) {
     options: structuredClone(options ?? {}),
     lines: lines.map((l) => ({ name: l.name, keys: [...l.keys], closed: !!l.closed })),
   };
+  if (view) doc.view = { position: [...view.position], target: [...view.target], orthographic: !!view.orthographic, zoom: view.zoom };
+  return doc;
+}
+
+// The camera a session was saved with: {position, target} in the mesh's coordinates,
+// orthographic or not, and the zoom of the orthographic view (1 in perspective).
+function checkView(view) {
+  const point = (p) => Array.isArray(p) && p.length === 3 && p.every(Number.isFinite);
+  if (!view || typeof view !== 'object' || !point(view.position) || !point(view.target)) throw new Error('"view" needs a "position" and a "target" of three numbers each');
+  if (typeof view.orthographic !== 'boolean' || !(Number.isFinite(view.zoom) && view.zoom > 0)) throw new Error('"view" needs "orthographic" (true or false) and a positive "zoom"');
 }
 
 // Parses and checks a session file's text; throws an Error saying what is wrong.
@@ -34,6 +44,7 @@ export function parseSession(text) {
       throw new Error(`line ${i + 1}: keys must be vertex ids from 0 to ${doc.mesh.vertices - 1}`);
   });
   if (doc.options != null && typeof doc.options !== 'object') throw new Error('"options" must be an object');
+  if (doc.view != null) checkView(doc.view);
   return doc;
 }
 

@@ -21,3 +21,13 @@ export function errorText(e) {
   if (e && typeof e === 'object' && 'status' in e && typeof e.toString === 'function' && e.name === 'ApiError') return e.toString();
   return e?.message ?? String(e);
 }
+
+// A vertex id typed by the user: an error text, or '' when it can be a key of the active line.
+export function vertexIdProblem(text, vertexCount, line) {
+  const trimmed = String(text).trim();
+  if (!/^\d+$/.test(trimmed)) return `"${trimmed}" is not a vertex id: type a whole number from 0 to ${vertexCount - 1}`;
+  const v = Number(trimmed);
+  if (v >= vertexCount) return `vertex ${v} is out of range: this mesh has vertices 0 to ${vertexCount - 1}`;
+  if (line?.keys.length && line.keys[line.keys.length - 1] === v) return `vertex ${v} is already the last key of ${line.name}`;
+  return '';
+}

@@ -23,6 +23,13 @@ export const COLORS = {
   edges: 0x1d2330,
 };
 const KEY_PIXELS = 7; // key marker radius on screen
+// A key hidden behind the surface is drawn faint and smaller, and cannot be grabbed.
+const HIDDEN_KEY_OPACITY = 0.3;
+const HIDDEN_KEY_SCALE = 0.7;
+// Framing leaves this share of the view around the mesh's bounding sphere.
+const FRAME_MARGIN = 1.04;
+// A top view looks down the up axis; OrbitControls needs the view a hair off it.
+const TOP_VIEW_TILT = 1e-3;
 // A press within this many pixels of a key's centre is on its marker (grab or select it);
 // anywhere else places a new key, so keys can sit close together.
 export const KEY_HIT_PIXELS = KEY_PIXELS + 2;
@@ -111,6 +118,15 @@ function quantisedCurvature(geometry) {
   return out;
 }
 
+// The mean length of the triangles' edges (each shared edge counted twice, which does not
+// change the mean much): the mesh's own scale for "close to the surface".
+export function meanEdgeLength(positions, index) {
+  let sum = 0;
+  const length = (a, b) => Math.hypot(positions[3 * a] - positions[3 * b], positions[3 * a + 1] - positions[3 * b + 1], positions[3 * a + 2] - positions[3 * b + 2]);
+  for (let c = 0; c < index.length; c += 3) sum += length(index[c], index[c + 1]) + length(index[c + 1], index[c + 2]) + length(index[c + 2], index[c]);
+  return index.length ? sum / index.length : 0;
+}
+
 export class Viewer {
   constructor(host) {
     this.host = host;
@@ -121,12 +137,14 @@ export class Viewer {
     this.canvas = this.renderer.domElement;
 
     this.scene = new THREE.Scene();
-    this.camera = new THREE.PerspectiveCamera(40, 1, 0.01, 100);
-    this.scene.add(this.camera);
+    this.perspectiveCamera = new THREE.PerspectiveCamera(40, 1, 0.01, 100);
+    this.orthographicCamera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0.01, 100);
+    this.camera = this.perspectiveCamera;
+    this.scene.add(this.perspectiveCamera, this.orthographicCamera);
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x404858, 0.9));
-    const headlight = new THREE.DirectionalLight(0xffffff, 2.2);
-    headlight.position.set(-0.6, 0.9, 0.5); // relative to the camera: from the viewer's upper left
-    this.camera.add(headlight);
+    this.headlight = new THREE.DirectionalLight(0xffffff, 2.2);
+    this.headlight.position.set(-0.6, 0.9, 0.5); // relative to the camera: from the viewer's upper left
+    this.camera.add(this.headlight);
 
     this.controls = new OrbitControls(this.camera, this.canvas);
     this.controls.enableDamping = false;
@@ -158,9 +176,55 @@ export class Viewer {
     const w = Math.max(1, this.host.clientWidth);
     const h = Math.max(1, this.host.clientHeight);
     this.renderer.setSize(w, h, false);
-    this.camera.aspect = w / h;
-    this.camera.updateProjectionMatrix();
+    this.perspectiveCamera.aspect = w / h;
+    this.perspectiveCamera.updateProjectionMatrix();
+    this.setOrthographicHalfHeight(this.orthographicCamera.top);
     this.render();
+  }
+
+  get aspect() {
+    return Math.max(1, this.host.clientWidth) / Math.max(1, this.host.clientHeight);
+  }
+
+  setOrthographicHalfHeight(halfHeight) {
+    const o = this.orthographicCamera;
+    o.top = halfHeight;
+    o.bottom = -halfHeight;
+    o.right = halfHeight * this.aspect;
+    o.left = -o.right;
+    o.updateProjectionMatrix();
+  }
+
+  get orthographic() {
+    return this.camera === this.orthographicCamera;
+  }
+
+  // Switches between perspective and orthographic projection, keeping what is seen at the orbit
+  // centre the same size.
+  setOrthographic(on) {
+    if (on === this.orthographic) return;
+    const from = this.camera;
+    const to = on ? this.orthographicCamera : this.perspectiveCamera;
+    const target = this.controls.target;
+    const distance = from.position.distanceTo(target);
+    const tanHalf = Math.tan(THREE.MathUtils.degToRad(this.perspectiveCamera.fov / 2));
+    to.position.copy(from.position);
+    to.up.copy(from.up);
+    if (on) {
+      to.zoom = 1;
+      this.setOrthographicHalfHeight(distance * tanHalf);
+    } else {
+      const halfHeight = from.top / from.zoom;
+      to.position.copy(target).addScaledVector(from.position.clone().sub(target).normalize(), halfHeight / tanHalf);
+    }
+    to.near = from.near;
+    to.far = from.far;
+    to.updateProjectionMatrix();
+    to.add(this.headlight);
+    this.camera = to;
+    this.controls.object = to;
+    this.controls.update();
+    this.requestRender();
   }
 
   requestRender() {
@@ -174,6 +238,7 @@ export class Viewer {
 
   render() {
     this.scaleKeyMarkers();
+    this.dimHiddenKeys();
     this.renderer.render(this.scene, this.camera);
     this.frames++;
   }
@@ -275,26 +340,76 @@ export class Viewer {
     this.requestRender();
   }
 
-  fitView() {
+  // The camera distance at which a sphere of this radius fills the view without being cut,
+  // by the narrower of the vertical and horizontal fields of view (a tall window is narrow).
+  fitDistance(radius) {
+    const halfVertical = THREE.MathUtils.degToRad(this.perspectiveCamera.fov / 2);
+    const halfHorizontal = Math.atan(Math.tan(halfVertical) * this.aspect);
+    return (radius * FRAME_MARGIN) / Math.sin(Math.min(halfVertical, halfHorizontal));
+  }
+
+  // Seen from the front (+z for Y-up, -y for Z-up), a little from the right and from above
+  // (more from above for Z-up meshes, which are mostly height fields and parts lying flat).
+  defaultViewDirection() {
+    return this.upAxis === 'z' ? new THREE.Vector3(0.25, -1.0, 0.95) : new THREE.Vector3(0.3, 0.45, 1.0);
+  }
+
+  // The direction from the orbit centre to the camera for a named view, by the up axis.
+  presetDirection(name) {
+    const zUp = this.upAxis === 'z';
+    const directions = {
+      front: zUp ? [0, -1, 0] : [0, 0, 1],
+      top: zUp ? [0, -TOP_VIEW_TILT, 1] : [0, 1, TOP_VIEW_TILT],
+      side: [1, 0, 0],
+    };
+    return directions[name] ? new THREE.Vector3(...directions[name]) : null;
+  }
+
+  fitView(direction = this.defaultViewDirection()) {
     if (!this.displayMesh) return;
-    const box = this.displayMesh.geometry.boundingBox;
-    const size = box.getSize(new THREE.Vector3());
-    const center = box.getCenter(new THREE.Vector3());
+    const center = this.displayMesh.geometry.boundingSphere.center.clone();
     const radius = Math.max(1e-9, this.displayMesh.geometry.boundingSphere.radius);
     this.radius = radius;
-    void size;
-    // Seen from the front (+z for Y-up, -y for Z-up), a little from the right and from above
-    // (more from above for Z-up meshes, which are mostly height fields and parts lying flat).
     const zUp = this.upAxis === 'z';
-    this.camera.up.set(0, zUp ? 0 : 1, zUp ? 1 : 0);
-    const dir = zUp ? new THREE.Vector3(0.25, -1.0, 0.95) : new THREE.Vector3(0.3, 0.45, 1.0);
-    dir.normalize();
-    const distance = radius / Math.sin(THREE.MathUtils.degToRad(this.camera.fov / 2)) * 0.95;
-    this.camera.position.copy(center).addScaledVector(dir, distance);
-    this.camera.near = distance / 100;
-    this.camera.far = distance * 20;
-    this.camera.updateProjectionMatrix();
+    const distance = this.fitDistance(radius);
+    for (const camera of [this.perspectiveCamera, this.orthographicCamera]) {
+      camera.up.set(0, zUp ? 0 : 1, zUp ? 1 : 0);
+      camera.position.copy(center).addScaledVector(direction.clone().normalize(), distance);
+      camera.near = distance / 100;
+      camera.far = distance * 20;
+      camera.zoom = 1;
+      camera.updateProjectionMatrix();
+    }
+    this.setOrthographicHalfHeight((radius * FRAME_MARGIN) / Math.min(1, this.aspect));
     this.controls.target.copy(center);
+    this.controls.update();
+    this.requestRender();
+  }
+
+  // Front, top or side, framing the whole mesh.
+  viewFrom(name) {
+    const direction = this.presetDirection(name);
+    if (direction) this.fitView(direction);
+    return !!direction;
+  }
+
+  // What a session keeps of the view: camera, orbit centre, projection and zoom.
+  viewState() {
+    return {
+      position: this.camera.position.toArray(),
+      target: this.controls.target.toArray(),
+      orthographic: this.orthographic,
+      zoom: this.camera.zoom,
+    };
+  }
+
+  setViewState({ position, target, orthographic = false, zoom = 1 }) {
+    if (!this.displayMesh) return;
+    this.setOrthographic(!!orthographic);
+    this.camera.position.fromArray(position);
+    this.controls.target.fromArray(target);
+    this.camera.zoom = zoom;
+    this.camera.updateProjectionMatrix();
     this.controls.update();
     this.requestRender();
   }
@@ -397,13 +512,18 @@ export class Viewer {
     return new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
   }
 
+  // The grid is built on the first pick, not before the first frame (igea: about 0.2 s).
+  pickingGrid() {
+    if (!this.triangleGrid || this.triangleGrid.positions !== this.mesh.positions)
+      this.triangleGrid = buildTriangleGrid(this.mesh.positions, this.mesh.index);
+    return this.triangleGrid;
+  }
+
   // The mesh vertex under the pointer: the corner of the hit triangle nearest to the hit.
   pickVertex(clientX, clientY) {
     if (!this.displayMesh) return null;
     this.raycaster.setFromCamera(this.ndc(clientX, clientY), this.camera);
-    // The grid is built on the first pick, not before the first frame (igea: about 0.2 s).
-    if (!this.triangleGrid || this.triangleGrid.positions !== this.mesh.positions)
-      this.triangleGrid = buildTriangleGrid(this.mesh.positions, this.mesh.index);
+    this.pickingGrid();
     // The mesh is drawn untransformed (the up axis turns the camera), so the world ray is the
     // mesh's own.
     const { origin, direction } = this.raycaster.ray;
@@ -455,8 +575,43 @@ export class Viewer {
     return { x: r.left + ((p.x + 1) / 2) * r.width, y: r.top + ((1 - p.y) / 2) * r.height, inFront: p.z < 1 && p.z > -1 };
   }
 
+  // Whether the mesh hides a point of its surface from the camera: the ray from the camera to
+  // the point meets the surface clearly before reaching it. "Clearly": further than an edge's
+  // length, so a key in a shallow valley seen at a slant still counts as seen.
+  isOccluded(point) {
+    if (!this.mesh) return false;
+    const origin = this.orthographic
+      ? point.clone().addScaledVector(this.camera.getWorldDirection(new THREE.Vector3()), -this.camera.far)
+      : this.camera.position.clone();
+    const toPoint = point.clone().sub(origin);
+    const distance = toPoint.length();
+    if (distance === 0) return false;
+    const hit = raycastGrid(this.pickingGrid(), origin.toArray(), toPoint.divideScalar(distance).toArray());
+    return !!hit && hit.t < distance - this.occlusionTolerance();
+  }
+
+  occlusionTolerance() {
+    if (this.meanEdge === undefined || this.meanEdgeOf !== this.mesh) {
+      this.meanEdge = meanEdgeLength(this.mesh.positions, this.mesh.index);
+      this.meanEdgeOf = this.mesh;
+    }
+    return Math.max(this.meanEdge, (this.radius || 1) * 1e-3);
+  }
+
+  // Markers of keys behind the surface: faint and smaller (they are drawn over the surface,
+  // so the key stays findable, but must not look like the one in front).
+  dimHiddenKeys() {
+    for (const marker of this.keyGroup.children) {
+      const hidden = this.isOccluded(marker.position);
+      marker.userData.hidden = hidden;
+      marker.userData.scale = hidden ? HIDDEN_KEY_SCALE : 1;
+      marker.material.opacity = hidden ? HIDDEN_KEY_OPACITY : marker.userData.opacity;
+    }
+  }
+
   // The key marker nearest to the pointer within a few pixels: {lineId, keyIndex}; keys of
-  // the active line win over others.
+  // the active line win over others. Keys hidden behind the surface are not picked: the press
+  // is on the surface in front of them.
   pickKey(clientX, clientY, radiusPx = KEY_HIT_PIXELS) {
     let best = null;
     let bestScore = Infinity;
@@ -464,7 +619,7 @@ export class Viewer {
       const s = this.toClient(marker.position);
       if (!s.inFront) continue;
       const d = Math.hypot(s.x - clientX, s.y - clientY);
-      if (d > radiusPx) continue;
+      if (d > radiusPx || this.isOccluded(marker.position)) continue;
       const score = d - (marker.userData.active ? 1000 : 0);
       if (score < bestScore) {
         bestScore = score;
@@ -558,13 +713,11 @@ export class Viewer {
         const hover = this.hoverKey && this.hoverKey.lineId === line.id && this.hoverKey.keyIndex === i;
         const selected = this.selectedKey && this.selectedKey.lineId === line.id && this.selectedKey.keyIndex === i;
         const color = hover ? COLORS.hoverKey : selected ? COLORS.selectedKey : !active ? COLORS.otherKey : i === 0 ? COLORS.firstKey : COLORS.key;
-        const marker = new THREE.Mesh(
-          this.keyMarkerGeometry,
-          new THREE.MeshBasicMaterial({ color, depthTest: false, transparent: true, opacity: active ? 1 : 0.85 }),
-        );
+        const opacity = active ? 1 : 0.85;
+        const marker = new THREE.Mesh(this.keyMarkerGeometry, new THREE.MeshBasicMaterial({ color, depthTest: false, transparent: true, opacity }));
         marker.position.copy(this.vertexPosition(v));
         marker.renderOrder = 3;
-        marker.userData = { lineId: line.id, keyIndex: i, active, vertex: v };
+        marker.userData = { lineId: line.id, keyIndex: i, active, vertex: v, opacity };
         marker.name = 'key';
         this.keyGroup.add(marker);
       });
@@ -575,11 +728,14 @@ export class Viewer {
   // Key markers keep a constant size on screen.
   scaleKeyMarkers() {
     const h = this.canvas.clientHeight || 1;
-    const k = (2 * Math.tan(THREE.MathUtils.degToRad(this.camera.fov / 2))) / h;
-    for (const m of [...this.keyGroup.children, ...this.hoverGroup.children]) {
-      const distance = m.position.distanceTo(this.camera.position);
-      m.scale.setScalar(Math.max(1e-9, distance * k * KEY_PIXELS * (m.userData.scale ?? 1)));
-    }
+    const c = this.camera;
+    // World units per pixel: at the marker's distance in perspective, everywhere the same in
+    // orthographic projection.
+    const perPixel = this.orthographic
+      ? () => (c.top - c.bottom) / c.zoom / h
+      : (m) => (m.position.distanceTo(c.position) * 2 * Math.tan(THREE.MathUtils.degToRad(c.fov / 2))) / h;
+    for (const m of [...this.keyGroup.children, ...this.hoverGroup.children])
+      m.scale.setScalar(Math.max(1e-9, perPixel(m) * KEY_PIXELS * (m.userData.scale ?? 1)));
   }
 
   // ---- for tests ----------------------------------------------------------------------
@@ -598,6 +754,8 @@ export class Viewer {
       refinedLines: count((u) => u.kind === 'refined' && !u.ghost),
       lineObjects: this.lineGroup.children.length,
       keyMarkers: this.keyGroup.children.length,
+      keys: this.keyGroup.children.map((m) => ({ lineId: m.userData.lineId, keyIndex: m.userData.keyIndex, vertex: m.userData.vertex, hidden: this.isOccluded(m.position), opacity: m.material.opacity })),
+      orthographic: this.orthographic,
       segmentSceneShown: this.segmentGroup.visible && this.segmentGroup.children.length > 0,
       staleLines: count((u) => u.kind === 'refined' && !u.ghost && u.stale),
       flatShading: this.flatShading,
