@@ -11,6 +11,15 @@ using nlohmann::json;
 
 json point_json(const Eigen::Vector3d& p) { return json::array({p.x(), p.y(), p.z()}); }
 
+json trace_json(const TraceResult& t) {
+  json ends = json::array(), junctions = json::array();
+  for (const auto& end : t.ends) ends.push_back({{"vertex", end.vertex}, {"reason", to_string(end.reason)}});
+  for (const auto& j : t.junctions) junctions.push_back({{"vertex", j.vertex}, {"branches", j.branches}, {"followed", j.followed}});
+  return {{"key", t.clicked},           {"seed", t.seed},   {"sign", to_string(t.sign)},
+          {"on_crease", t.on_crease},   {"ends", ends},     {"junctions", junctions},
+          {"seed_strength", t.seed_strength}, {"steps", t.steps}, {"ms", t.elapsed_ms}};
+}
+
 }  // namespace
 
 void apply_options_json(const json& j, FeatureLineOptions& o) { apply_options(feature_line_option_table(), j, "options", o); }
@@ -45,11 +54,11 @@ json feature_line_to_json(const FeatureLineResult& r) {
                              {"refined_strength", p.refined_strength}});
     iteration_caps += p.iteration_cap ? 1 : 0;
   }
-  return {
+  json answer = {
       {"keys", r.keys},
       {"closed", r.closed},
       {"initial",
-       {{"method", to_string(r.initial.method)},
+       {{"method", r.trace ? "trace" : to_string(r.initial.method)},
         {"vertices", r.initial.vertices},
         {"points", initial_points},
         {"length", r.initial.length}}},
@@ -72,6 +81,8 @@ json feature_line_to_json(const FeatureLineResult& r) {
           {"snake", r.timings.snake_ms},
           {"total", r.timings.total_ms}}}}},
   };
+  if (r.trace) answer["trace"] = trace_json(*r.trace);
+  return answer;
 }
 
 json mesh_info_to_json(const PreparedMesh& m, double load_ms) {

@@ -184,6 +184,24 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "across the line (strip edge lengths)", "", &O::crest, &CrestOptions::max_shift),
       option<O>("crest.smoothing_passes", within(CrestOptions::smoothing_passes_range), "Crest localisation: (1, 2, 1)/4 "
                 "passes over the moves along the line", "", &O::crest, &CrestOptions::smoothing_passes),
+      option<O>("trace.sign", {}, "A line traced from one key follows: a crease's sign near the key, else the larger "
+                "curvature's (auto), or ridges or valleys only", "--trace-sign", &O::trace, &TraceOptions::sign),
+      option<O>("trace.max_edges", within(TraceOptions::max_edges_range, kEngineEnd, 1000), "Traced lines: the longest, "
+                "in edges (also within max_line_edges)", "", &O::trace, &TraceOptions::max_edges),
+      option<O>("trace.stop_strength", within(TraceOptions::stop_strength_range), "Traced lines: the trace ends where the "
+                "feature falls below this share of its strength at the key", "", &O::trace, &TraceOptions::stop_strength),
+      option<O>("trace.min_signal_to_noise", within(TraceOptions::min_signal_to_noise_range), "Traced lines: ... or below "
+                "this many times the estimated noise (0: off)", "", &O::trace, &TraceOptions::min_signal_to_noise),
+      option<O>("trace.step", within(TraceOptions::step_range), "Traced lines: step along smooth crests (local edge "
+                "lengths)", "", &O::trace, &TraceOptions::step),
+      option<O>("trace.max_turn", within(TraceOptions::max_turn_range), "Traced lines: the most a step or a crease at "
+                "a junction may turn (degrees)", "", &O::trace, &TraceOptions::max_turn),
+      option<O>("trace.follow_junctions", {}, "Traced lines: continue through a junction of creases along the branch "
+                "that turns least (false: stop at junctions)", "--stop-at-junctions", &O::trace, &TraceOptions::follow_junctions),
+      option<O>("trace.max_gap_edges", within(TraceOptions::max_gap_edges_range), "Traced lines: a crease chain broken "
+                "by noise continues when it resumes within this many edges", "", &O::trace, &TraceOptions::max_gap_edges),
+      option<O>("trace.snap_rings", within(TraceOptions::snap_rings_range), "Traced lines: the key moves to a crease "
+                "within this many rings, else up the feature field this many edges", "", &O::trace, &TraceOptions::snap_rings),
       option<O>("keep_initial_below", {0, 1}, "A refined piece weaker on the feature than this share of its initial "
                 "line keeps the initial line (0: always the snake's)", "", &O::keep_initial_below),
       option<O>("snake.alpha", within(S::alpha_range, kEngineEnd, 1000), "Elasticity: resistance to stretching (Eq. 12)", "--alpha", &O::snake, &S::alpha),

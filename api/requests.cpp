@@ -39,7 +39,7 @@ std::uint32_t parse_key(const json& k, const PreparedMesh& mesh, const std::stri
 FeatureLineRequest parse_line_request(const json& j, const PreparedMesh& mesh, const std::string& where) {
   if (!j.is_object()) throw InvalidInputError(where + " must be a JSON object");
   for (auto it = j.begin(); it != j.end(); ++it)
-    if (it.key() != "keys" && it.key() != "closed" && it.key() != "options")
+    if (it.key() != "keys" && it.key() != "closed" && it.key() != "trace" && it.key() != "options")
       throw InvalidInputError("unknown field \"" + where + "." + it.key() + "\"");
   FeatureLineRequest line;
   const auto keys = j.find("keys");
@@ -51,6 +51,10 @@ FeatureLineRequest parse_line_request(const json& j, const PreparedMesh& mesh, c
   if (const auto closed = j.find("closed"); closed != j.end()) {
     if (!closed->is_boolean()) throw InvalidInputError(where + ".closed must be true or false");
     line.closed = closed->get<bool>();
+  }
+  if (const auto trace = j.find("trace"); trace != j.end()) {
+    if (!trace->is_boolean()) throw InvalidInputError(where + ".trace must be true or false");
+    line.trace = trace->get<bool>();
   }
   if (const auto options = j.find("options"); options != j.end()) apply_options_json(*options, line.options);
   return line;

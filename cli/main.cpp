@@ -47,15 +47,11 @@ struct Inputs {
 struct LineFlags {
   std::string keys, points, request_path, out_path, options_text;
   std::vector<double> weights;
-  bool closed = false;
+  bool closed = false, trace = false;
   json options = json::object();       // feature-line table flags (they win over --options)
   json segmentation = json::object();  // segmentation table flags
   std::vector<std::string> loops, open_lines;
 };
-
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 std::string either(const std::vector<std::string>& names) {
   std::string text;
@@ -146,7 +142,10 @@ void add_line_flags(CLI::App& command, LineFlags& f) {
                       ->type_name("FILE");
   keys->excludes(points)->excludes(request);
   points->excludes(request);
-  command.add_flag("--closed", f.closed, "Join the last key to the first (a loop)")->excludes(request);
+  auto* closed = command.add_flag("--closed", f.closed, "Join the last key to the first (a loop)")->excludes(request);
+  command.add_flag("--trace", f.trace, "One key: the line is the whole feature through it, traced both ways (closed when it closes)")
+      ->excludes(request)
+      ->excludes(closed);
   command.add_option("--weights", f.weights, "Marching weights alpha,beta,gamma,delta (paper: 1,1,1,2)")
       ->expected(4)
       ->delimiter(',')
@@ -275,6 +274,7 @@ json feature_line_body(const LineFlags& f) {
   if (f.keys.empty() && f.points.empty()) throw CLI::RequiredError("--keys, --points or --request");
   json line = {{"keys", f.keys.empty() ? key_points(f.points) : key_ids(f.keys)}};
   if (f.closed) line["closed"] = true;
+  if (f.trace) line["trace"] = true;
   if (!options.empty()) line["options"] = options;
   return line;
 }
