@@ -8,20 +8,22 @@
 #     LISTEN         what nginx listens on: 127.0.0.1:8080, or 8080 for every address
 #     MAX_UPLOAD_MB  the replicas' --max-upload-mb (larger bodies get 413 at the edge)
 #     REPLICA        HOST:PORT of a featureline-server, one or more
-#   NGINX_USER=name sets the workers' user; by default, started as root the workers stay root
-#   (they must reach STATE_DIR, which may be under a private folder); otherwise nginx keeps
-#   the user who starts it.
+#   NGINX_USER=name sets the workers' user; by default, started as root the workers run as
+#   nobody:nogroup (never as root), otherwise nginx keeps the user who starts it.
+#   NGINX_TEMP=DIR: where workers write request bodies and buffered answers (default
+#   STATE_DIR/nginx-temp); workers running as another user must be able to reach it.
 set -euo pipefail
-[ $# -ge 4 ] || { sed -n '6,14p' "$0" | sed 's/^# *//' >&2; exit 2; }
+[ $# -ge 4 ] || { sed -n '6,16p' "$0" | sed 's/^# *//' >&2; exit 2; }
 template="$(cd "$(dirname "$0")" && pwd)/nginx.conf.template"
 state=$1 listen=$2 max_upload_mb=$3
 shift 3
 if [ -n "${NGINX_USER:-}" ]; then user="user $NGINX_USER;"
-elif [ "$(id -u)" = 0 ]; then user="user root root;"
+elif [ "$(id -u)" = 0 ]; then user="user nobody nogroup;"
 else user="# user: not started as root, nginx keeps the user who started it"; fi
+temp=${NGINX_TEMP:-$state/nginx-temp}
 replicas=$(IFS='|'; echo "$*")
-awk -v state="$state" -v listen="$listen" -v mb="$max_upload_mb" -v user="$user" -v replicas="$replicas" '
-  { gsub(/@STATE@/, state); gsub(/@LISTEN@/, listen); gsub(/@MAX_UPLOAD_MB@/, mb); gsub(/@USER@/, user) }
+awk -v state="$state" -v temp="$temp" -v listen="$listen" -v mb="$max_upload_mb" -v user="$user" -v replicas="$replicas" '
+  { gsub(/@TEMP@/, temp); gsub(/@STATE@/, state); gsub(/@LISTEN@/, listen); gsub(/@MAX_UPLOAD_MB@/, mb); gsub(/@USER@/, user) }
   /^@REPLICAS@$/ {
     n = split(replicas, r, "|")
     for (i = 1; i <= n; i++) printf "    server %s max_fails=1 fail_timeout=10s;\n", r[i]

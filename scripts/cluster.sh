@@ -9,9 +9,14 @@
 # Ports: Redis on P+1, replica I (1..N) on P+1+I (each checked free before it starts).
 # State (pid files, logs, the rendered nginx.conf, Redis' append-only file) lives in
 # D = ${XDG_STATE_HOME:-~/.local/state}/featureline/cluster-P; Redis' data persists across
-# down/up unless --wipe. `up` starts only what is not running (it also restarts a dead replica).
+# down/up unless --wipe. `up` starts only what is not running (it also restarts a dead replica)
+# and stops replicas beyond --replicas that an earlier `up` started. A port held by another
+# program is an error naming it; nginx workers left by a killed nginx master are stopped first.
 # status prints one line per process: "nginx PID PORT", "redis PID PORT", "replica I PID PORT"
-# (PID "-" when not running); it exits 0 when all run, 1 when some do not, 3 when none does.
+# (PID "-" when not running) for every replica started, and "nginx-orphan PID PORT" for each
+# worker of a dead nginx master; it exits 0 when all run, 1 when some do not, 3 when none does.
+# Started as root, nginx's workers run as nobody:nogroup (NGINX_USER overrides), with their
+# temporary files in /run/featureline/nginx-P, which they can reach.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 
@@ -52,12 +57,48 @@ pid_of() {
   return 0
 }
 replica_port() { echo $((port + 1 + $1)); }
-# Replicas recorded by a previous `up` (status and down use what was started, not --replicas).
+# The highest replica number started: the count recorded by the last `up`, or a replica pid file
+# beyond it (an `up` with fewer replicas that was interrupted); status and down cover them all.
 started_replicas() {
-  if [ -s "$state/replicas" ]; then cat "$state/replicas"; else echo "$replicas"; fi
+  local n=0 file i
+  [ -s "$state/replicas" ] && n=$(tr -dc 0-9 <"$state/replicas")
+  for file in "$state"/pids/replica-*.pid; do
+    [ -e "$file" ] || continue
+    i=${file##*/replica-}; i=${i%.pid}
+    [[ "$i" =~ ^[0-9]+$ ]] && [ "$i" -gt "${n:-0}" ] && n=$i
+  done
+  echo "${n:-0}"
 }
 
 port_free() { ! ss -Htln "sport = :$1" 2>/dev/null | grep -q .; }
+# What holds a port, for errors: "pid 123 (nginx)" when ss may show it.
+port_holder() {
+  local who; who=$(ss -Htlnp "sport = :$1" 2>/dev/null | grep -o 'users:(([^)]*' | head -n 1 | sed 's/users:((//')
+  echo "${who:-a process this user cannot see}"
+}
+
+# nginx's master runs in a session of its own (it daemonizes with setsid) and its workers stay
+# in it: when the master is killed, the workers live on, holding the port. They are found by the
+# session id, which is the dead master's recorded pid, and by their title; nothing else is.
+nginx_orphans() {
+  local master file pid stat
+  file="$state/pids/nginx.pid"
+  [ -s "$file" ] || return 0
+  master=$(tr -dc 0-9 <"$file")
+  [ -n "$master" ] && [ -z "$(pid_of nginx nginx)" ] || return 0
+  for stat in /proc/[0-9]*/stat; do
+    pid=${stat#/proc/}; pid=${pid%/stat}
+    # Fields after the command: state ppid pgrp session ...
+    read -r -a fields < <(sed 's/^.*) //' "$stat" 2>/dev/null) || continue
+    [ "${fields[3]:-}" = "$master" ] || continue
+    tr '\0' ' ' <"/proc/$pid/cmdline" 2>/dev/null | grep -q '^nginx: ' && echo "$pid"
+  done
+  return 0
+}
+stop_nginx_orphans() {
+  local pid
+  for pid in $(nginx_orphans); do stop_pid "nginx worker (its master is gone)" "$pid"; done
+}
 
 # wait_until SECONDS COMMAND...: polls every 0.1 s, bounded.
 wait_until() {
@@ -82,7 +123,7 @@ stop_pid() {
 
 start_redis() {
   [ -n "$(pid_of redis redis-server)" ] && return 0
-  port_free "$redis_port" || die "port $redis_port (Redis) is taken"
+  port_free "$redis_port" || die "port $redis_port (Redis) is taken by $(port_holder "$redis_port")"
   mkdir -p "$state/redis"
   "$redis_bin" "$root/deploy/redis.conf" --port "$redis_port" --bind 127.0.0.1 --dir "$state/redis" \
     --daemonize yes --pidfile "$state/pids/redis.pid" --logfile "$state/logs/redis.log"
@@ -92,7 +133,7 @@ start_redis() {
 start_replica() {
   local i=$1 p; p=$(replica_port "$1")
   [ -n "$(pid_of "replica-$i" featureline-server)" ] && return 0
-  port_free "$p" || die "port $p (replica $i) is taken"
+  port_free "$p" || die "port $p (replica $i) is taken by $(port_holder "$p")"
   [ -x "$server_bin" ] || die "no server at $server_bin (build it: scripts/setup.sh)"
   # setsid: the replica outlives this script and its terminal; its pid is recorded for down.
   # nginx holds the clients and opens a connection per request in flight: each replica takes up
@@ -103,15 +144,21 @@ start_replica() {
   echo $! >"$state/pids/replica-$i.pid"
 }
 
+# Workers write request bodies and buffered answers there: as root they run as an unprivileged
+# user, who may not traverse the state folder (often under a private home or mktemp folder).
+nginx_temp() {
+  if [ "$(id -u)" = 0 ]; then echo "/run/featureline/nginx-$port"; else echo "$state/nginx-temp"; fi
+}
+
 render_nginx_conf() {
   local servers=() i
   for ((i = 1; i <= replicas; i++)); do servers+=("127.0.0.1:$(replica_port "$i")"); done
-  "$root/deploy/render-nginx-conf.sh" "$state" "127.0.0.1:$port" "$max_upload_mb" "${servers[@]}" >"$state/nginx.conf"
+  NGINX_TEMP=$(nginx_temp) "$root/deploy/render-nginx-conf.sh" "$state" "127.0.0.1:$port" "$max_upload_mb" "${servers[@]}" >"$state/nginx.conf"
 }
 
 start_nginx() {
   render_nginx_conf
-  mkdir -p "$state/nginx-temp"
+  mkdir -p "$(nginx_temp)"
   # -e: the error log from the first line on (nginx would otherwise open /var/log/nginx first).
   "$nginx_bin" -t -q -p "$state" -e "$state/logs/nginx-error.log" -c "$state/nginx.conf" ||
     die "nginx -t refused $state/nginx.conf"
@@ -120,7 +167,9 @@ start_nginx() {
     kill -HUP "$pid"  # reload: the replica list may have changed
     return 0
   fi
-  port_free "$port" || die "port $port (nginx) is taken"
+  stop_nginx_orphans
+  port_free "$port" || die "port $port (nginx) is taken by $(port_holder "$port")"
+  rm -f "$state/nginx.pid"
   "$nginx_bin" -p "$state" -e "$state/logs/nginx-error.log" -c "$state/nginx.conf"
   wait_until 10 test -s "$state/nginx.pid" || die "nginx did not start (see $state/logs/nginx-error.log)"
   cp "$state/nginx.pid" "$state/pids/nginx.pid"
@@ -133,6 +182,7 @@ status() {
   local n; n=$(started_replicas)
   local running=0 total=$((n + 2)) pid i
   pid=$(pid_of nginx nginx); echo "nginx ${pid:--} $port"; [ -n "$pid" ] && running=$((running + 1))
+  for pid in $(nginx_orphans); do echo "nginx-orphan $pid $port"; done
   pid=$(pid_of redis redis-server); echo "redis ${pid:--} $redis_port"; [ -n "$pid" ] && running=$((running + 1))
   for ((i = 1; i <= n; i++)); do
     pid=$(pid_of "replica-$i" featureline-server)
@@ -152,16 +202,24 @@ up() {
     rm -rf "$state/redis"
   fi
   mkdir -p "$state/pids" "$state/logs"
-  echo "$replicas" >"$state/replicas"
+  local i surplus; surplus=$(started_replicas)
   start_redis
-  local i
   for ((i = 1; i <= replicas; i++)); do start_replica "$i"; done
   for ((i = 1; i <= replicas; i++)); do
     wait_until 30 http_ok "$(replica_port "$i")" || die "replica $i did not answer on port $(replica_port "$i") (see $state/logs/replica-$i.log)"
   done
   start_nginx
   wait_until 10 http_ok "$port" || die "nginx did not answer on port $port (see $state/logs/nginx-error.log)"
+  # nginx no longer routes to replicas beyond --replicas (reloaded above): stop them.
+  for ((i = replicas + 1; i <= surplus; i++)); do stop_replica "$i"; done
+  echo "$replicas" >"$state/replicas"
   status
+}
+
+stop_replica() {
+  local pid; pid=$(pid_of "replica-$1" featureline-server)
+  [ -n "$pid" ] && stop_pid "replica $1" "$pid"
+  rm -f "$state/pids/replica-$1.pid"
 }
 
 down() {
@@ -170,12 +228,14 @@ down() {
   local pid i
   # The front first (no new requests), then the replicas, Redis last (its AOF is fsynced on exit).
   pid=$(pid_of nginx nginx); [ -n "$pid" ] && stop_pid nginx "$pid"
-  for ((i = 1; i <= n; i++)); do
-    pid=$(pid_of "replica-$i" featureline-server); [ -n "$pid" ] && stop_pid "replica $i" "$pid"
-  done
+  stop_nginx_orphans
+  for ((i = 1; i <= n; i++)); do stop_replica "$i"; done
   pid=$(pid_of redis redis-server); [ -n "$pid" ] && stop_pid redis "$pid"
   rm -rf "$state/pids"
+  [ "$(id -u)" = 0 ] && rm -rf "$(nginx_temp)"
   [ "$wipe" = 1 ] && rm -rf "$state/redis"
+  # Done only when nothing answers on the front port any more.
+  port_free "$port" || die "down: port $port is still held by $(port_holder "$port"), not a process this cluster recorded"
   echo "cluster: down (port $port)$([ "$wipe" = 1 ] && echo ", Redis data wiped")"
 }
 

@@ -36,6 +36,7 @@
 #include "server/http_errors.h"
 #include "server/metrics.h"
 #include "server/session_cache.h"
+#include "server/store_breaker.h"
 #include "server/transport.h"
 #include "server/upload_store.h"
 #include "server/web_assets.h"
@@ -135,12 +136,24 @@ ReadMeshOptions upload_read_limits(const ServerOptions& o) {
 // most a minute. The store keeps uploads this much longer than the cache keeps prepared meshes.
 std::chrono::seconds store_touch_interval(const ServerOptions& o) { return std::chrono::seconds(std::clamp(o.ttl_s / 4, 1, 60)); }
 
-std::unique_ptr<UploadStore> open_store(const ServerOptions& o) {
+// The store behind a circuit breaker (server/store_breaker.h); `breaker` is set to it.
+std::unique_ptr<UploadStore> open_store(const ServerOptions& o, StoreBreaker*& breaker) {
   if (o.store.empty()) return nullptr;
   StoreOptions store_options;
   store_options.idle_ttl = std::chrono::seconds(o.ttl_s) + store_touch_interval(o);
   store_options.max_bytes = o.store_max_mb << 20;
-  return open_upload_store(o.store, store_options);
+  auto guarded = std::make_unique<StoreBreaker>(open_upload_store(o.store, store_options), BreakerOptions{});
+  breaker = guarded.get();
+  return guarded;
+}
+
+std::string utc_time(std::int64_t unix_s) {
+  char stamp[32];
+  const std::time_t t = unix_s;
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return stamp;
 }
 
 // Reads and prepares an upload: engine work, run on the pool (uploads and rebuilds alike).
@@ -166,7 +179,8 @@ struct FeaturelineServer::Impl {
   const ReadMeshOptions read_limits;
   SessionCache cache;
   WorkPool pool;
-  DurableSessions sessions;  // the cache in front of the upload store (if any)
+  StoreBreaker* breaker = nullptr;  // in front of the upload store (owned by sessions); null without one
+  DurableSessions sessions;         // the cache in front of the upload store (if any)
   Metrics metrics;
   const Clock::time_point started = Clock::now();
   std::mutex log_mutex;
@@ -182,7 +196,7 @@ struct FeaturelineServer::Impl {
         read_limits(upload_read_limits(options)),
         cache(SessionCache::Options{options.cache_mb << 20, std::chrono::seconds(options.ttl_s), [] { return Clock::now(); }}),
         pool(options.engine_threads, options.queue_capacity),
-        sessions(cache, open_store(options), [this](std::shared_ptr<const StoredUpload> upload) { return rebuild(std::move(upload)); },
+        sessions(cache, open_store(options, breaker), [this](std::shared_ptr<const StoredUpload> upload) { return rebuild(std::move(upload)); },
                  {store_touch_interval(options)}) {
     configure_transport();
     register_routes();
@@ -345,8 +359,31 @@ struct FeaturelineServer::Impl {
         return HttpError(404, "not_found", mesh + " expired after " + std::to_string(options.ttl_s) + " s without use; upload it again");
       case DurableSessions::Gone::evicted:
         return HttpError(404, "not_found", mesh + " was evicted to make room for newer uploads; upload it again");
+      case DurableSessions::Gone::lost:
+        return HttpError(404, "not_found", mesh + " was lost by the upload store, which lost its data at " + last_store_loss() +
+                                               " (restarted empty?); upload it again");
+      case DurableSessions::Gone::unknown_after_loss:
+        return HttpError(404, "not_found", "no mesh with id " + quote_client_text(id) + "; the upload store lost its data at " +
+                                               last_store_loss() + " (restarted empty?): a mesh uploaded before then must be uploaded again");
       default: return HttpError(404, "not_found", "no mesh with id " + quote_client_text(id));
     }
+  }
+
+  std::string last_store_loss() const { return utc_time(sessions.store_losses().last_unix_s); }
+
+  // Readiness: whether this replica should get traffic. Not ready (503 storage_unavailable) while
+  // the store's breaker is open or the store does not answer a probe: a replica without its store
+  // can neither take uploads nor rebuild sessions. The body says when the store lost its data.
+  json readiness() {
+    json ready = {{"status", "ready"}, {"store", nullptr}, {"store_data_losses", 0}, {"store_last_data_loss", nullptr}};
+    if (!breaker) return ready;
+    ready["store"] = breaker->describe();
+    if (breaker->open()) throw StoreUnavailableError("not ready: " + breaker->open_reason() + "; the breaker is open until it answers");
+    breaker->probe();  // throws StoreUnavailableError: not ready
+    const StoreLosses losses = sessions.store_losses();
+    ready["store_data_losses"] = losses.count;
+    if (losses.count > 0) ready["store_last_data_loss"] = utc_time(losses.last_unix_s);
+    return ready;
   }
 
   // Prepares a stored upload again after a cache miss (eviction, restart, another replica's id).
@@ -442,6 +479,7 @@ struct FeaturelineServer::Impl {
                   {"meshes", cache.stats().entries},
                   {"uptime_s", std::chrono::duration<double>(Clock::now() - started).count()}});
     }));
+    http.Get("/readyz", guarded("/readyz", [this](const auto&, auto& res) { write_json(res, 200, readiness()); }));
     http.Get("/metrics", guarded("/metrics", [this](const auto&, auto& res) {
       const auto s = cache.stats();
       const std::map<std::string, std::pair<std::string, double>> gauges = {
@@ -455,6 +493,12 @@ struct FeaturelineServer::Impl {
                                                 double(sessions.rebuilds())}},
           {"featureline_store_bytes", {"Upload bytes held by a directory store.",
                                        double(sessions.store() ? sessions.store()->bytes() : 0)}},
+          {"featureline_store_breaker_open", {"1 while the upload store's circuit breaker is open (operations fail at once).",
+                                              breaker && breaker->open() ? 1.0 : 0.0}},
+          {"featureline_store_breaker_openings_total", {"Times the upload store's circuit breaker opened after consecutive timeouts.",
+                                                        double(breaker ? breaker->openings() : 0)}},
+          {"featureline_store_data_losses_total", {"Times the upload store was found to have lost its data (Redis restarted empty).",
+                                                   double(sessions.store_losses().count)}},
           {"featureline_pool_queue_depth", {"Engine jobs waiting for a thread.", double(pool.queue_depth())}},
           {"featureline_pool_running", {"Engine jobs running.", double(pool.running())}},
           {"featureline_pool_threads", {"Engine threads.", double(pool.threads())}},

@@ -33,7 +33,9 @@ SessionCache::SessionCache(Options options) : options_(std::move(options)) {}
 
 void SessionCache::remember_gone(const std::string& id, Miss why) {
   constexpr std::size_t kRemembered = 4096;
-  if (gone_.emplace(id, why).second) gone_order_.push_back(id);
+  // The latest reason wins: an id evicted, rebuilt and then deleted was deleted.
+  if (auto [it, inserted] = gone_.emplace(id, why); inserted) gone_order_.push_back(id);
+  else it->second = why;
   while (gone_order_.size() > kRemembered) {
     gone_.erase(gone_order_.front());
     gone_order_.pop_front();
@@ -104,14 +106,14 @@ std::shared_ptr<const MeshSession> SessionCache::find(const std::string& id, Mis
   return it->second.session;
 }
 
-bool SessionCache::erase(const std::string& id) {
+bool SessionCache::erase(const std::string& id, Miss why) {
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = entries_.find(id);
   if (it == entries_.end()) return false;
   bytes_ -= it->second.session->bytes;
   if (it->second.session->pinned) pinned_bytes_ -= it->second.session->bytes;
   else lru_.erase(it->second.position);
-  remember_gone(id, Miss::deleted);
+  remember_gone(id, why);
   entries_.erase(it);
   return true;
 }
@@ -146,6 +148,7 @@ DurableSessions::Gone gone_from(SessionCache::Miss miss) {
     case SessionCache::Miss::expired: return DurableSessions::Gone::expired;
     case SessionCache::Miss::evicted: return DurableSessions::Gone::evicted;
     case SessionCache::Miss::deleted: return DurableSessions::Gone::deleted;
+    case SessionCache::Miss::lost: return DurableSessions::Gone::lost;
     default: return DurableSessions::Gone::unknown;
   }
 }
@@ -160,7 +163,18 @@ DurableSessions::Gone DurableSessions::why_gone(const std::string& id, StoreMiss
   // The store never had it (or no store): what this process remembers, if anything.
   SessionCache::Miss miss = SessionCache::Miss::unknown;
   if (cache_.find(id, &miss)) return Gone::unknown;  // cached meanwhile: the caller retries
+  if (miss == SessionCache::Miss::unknown && store_ && store_->losses().count > 0) return Gone::unknown_after_loss;
   return gone_from(miss);
+}
+
+// A cached session whose upload the store no longer has: deleted or expired by another replica,
+// or lost with the store's data (no tombstone says otherwise, and the store lost data since the
+// session was stored). The cached copy goes either way: no replica can rebuild it any more.
+DurableSessions::Gone DurableSessions::drop_unstored(const std::shared_ptr<const MeshSession>& session) {
+  const StoreMiss miss = store_->get(session->id).why;
+  const bool lost = miss == StoreMiss::unknown && store_->losses().count > session->store_losses;
+  cache_.erase(session->id, lost ? SessionCache::Miss::lost : SessionCache::Miss::deleted);
+  return why_gone(session->id, miss);
 }
 
 DurableSessions::Found DurableSessions::find(const std::string& id) {
@@ -170,10 +184,8 @@ DurableSessions::Found DurableSessions::find(const std::string& id) {
   if (found.session) {
     // A preloaded mesh stays while the server runs, even if the store expires its copy.
     if (found.session->pinned || still_stored(id)) return found;
-    // Deleted or expired in the store by another replica: the cached copy goes too.
-    cache_.erase(id);
+    found.why = drop_unstored(found.session);
     found.session = nullptr;
-    found.why = why_gone(id, store_->get(id).why);
     return found;
   }
   if (!store_) {
@@ -230,6 +242,7 @@ DurableSessions::Found DurableSessions::load_from_store(const std::string& id) {
     throw too_large(id, std::string(": ") + e.what());
   }
   session.id = id;
+  session.store_losses = store_->losses().count;
   const std::size_t bytes = session.bytes;
   auto cached = cache_.insert(std::move(session));
   if (!cached) throw too_large(id, " needs " + std::to_string(bytes >> 20) + " MiB prepared");
@@ -274,6 +287,7 @@ bool DurableSessions::still_stored(const std::string& id) {
 
 std::optional<std::shared_ptr<const MeshSession>> DurableSessions::create(MeshSession session, const StoredUpload& upload) {
   session.id.clear();  // a fresh random id
+  if (store_) session.store_losses = store_->losses().count;
   auto cached = cache_.insert(std::move(session));
   if (!cached || !store_) return cached;
   const std::string id = (*cached)->id;

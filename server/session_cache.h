@@ -31,6 +31,9 @@ struct MeshSession {
   double load_ms = 0;
   std::size_t bytes = 0;  ///< what the session costs in the budget (PreparedMesh::memory_bytes)
   bool pinned = false;    ///< preloaded at start: never expires nor is evicted (still counts in the budget)
+  /// The store's data losses (StoreLosses::count) when the session was stored or rebuilt: one
+  /// found later means the store may have lost this session's upload.
+  std::uint64_t store_losses = 0;
 };
 
 /// 128 random bits from the operating system's CSPRNG (getrandom), as 32 lowercase hex digits.
@@ -51,7 +54,7 @@ class SessionCache {
   };
 
   /// Why a lookup found nothing.
-  enum class Miss { unknown, expired, evicted, deleted };
+  enum class Miss { unknown, expired, evicted, deleted, lost };
 
   explicit SessionCache(Options options);
 
@@ -64,8 +67,8 @@ class SessionCache {
   /// The session, refreshed as most recently used; or why not.
   std::shared_ptr<const MeshSession> find(const std::string& id, Miss* why = nullptr);
 
-  /// Removes a session (remembered as deleted); false when there was none.
-  bool erase(const std::string& id);
+  /// Removes a session (remembered as `why`: deleted, or lost by the store); false when there was none.
+  bool erase(const std::string& id, Miss why = Miss::deleted);
 
   /// Drops every session idle longer than the TTL (also done lazily by find and insert).
   void expire_idle();
@@ -119,8 +122,10 @@ class DurableSessions {
     std::chrono::seconds touch_interval{60};
   };
 
-  /// Why a session could not be found.
-  enum class Gone { unknown, deleted, expired, evicted };
+  /// Why a session could not be found. `lost`: the store lost its upload (Redis restarted
+  /// empty); `unknown_after_loss`: unknown, but the store lost its data since this process
+  /// started, so an id from before then may have been lost with it.
+  enum class Gone { unknown, deleted, expired, evicted, lost, unknown_after_loss };
 
   struct Found {
     std::shared_ptr<const MeshSession> session;  ///< null when gone
@@ -151,11 +156,14 @@ class DurableSessions {
   bool durable() const { return store_ != nullptr; }
   const UploadStore* store() const { return store_.get(); }
   std::size_t rebuilds() const { return rebuilds_.load(); }
+  /// The store's data losses found so far (none without a store).
+  StoreLosses store_losses() const { return store_ ? store_->losses() : StoreLosses{}; }
 
  private:
   Found rebuild_once(const std::string& id);
   Found load_from_store(const std::string& id);
   Gone why_gone(const std::string& id, StoreMiss store_miss);
+  Gone drop_unstored(const std::shared_ptr<const MeshSession>& session);
   bool still_stored(const std::string& id);
   CacheTooSmallError too_large(const std::string& id, const std::string& why);
 

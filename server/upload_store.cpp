@@ -189,6 +189,13 @@ class DirectoryStore final : public UploadStore {
     return bytes_;
   }
 
+  void probe() override {
+    if (access((root_ + "/uploads").c_str(), W_OK) != 0)
+      throw StoreUnavailableError("the upload store failed: " + errno_text("access", root_ + "/uploads"));
+  }
+  // A folder that vanished is unavailable (503), never taken for an empty store: nothing is lost unseen.
+  StoreLosses losses() const override { return {}; }
+
   bool shared() const override { return false; }  // one server per folder
   std::string describe() const override { return "directory " + root_; }
 

@@ -49,6 +49,19 @@ class StoreUnavailableError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// The store did not answer within its timeout (a hung Redis): the request waited for nothing.
+/// Consecutive ones open the circuit breaker (server/store_breaker.h).
+class StoreTimeoutError : public StoreUnavailableError {
+  using StoreUnavailableError::StoreUnavailableError;
+};
+
+/// Times this process found the store to have lost its data (Redis restarted empty or flushed):
+/// uploads stored before then are gone without a delete or an expiry to say so.
+struct StoreLosses {
+  std::uint64_t count = 0;
+  std::int64_t last_unix_s = 0;  ///< when the last loss was found (wall clock; 0: never)
+};
+
 /// Every operation is safe from any thread. Ids must be 32 lowercase hex digits (they become
 /// file names and keys); other ids are unknown to get/erase and refused by put.
 class UploadStore {
@@ -68,6 +81,11 @@ class UploadStore {
   virtual std::size_t expire_idle() = 0;
   /// Bytes of uploads held (the directory's own count; Redis: 0, its limit is its maxmemory).
   virtual std::size_t bytes() const = 0;
+  /// One round trip that needs no upload: readiness and the circuit breaker's probe.
+  /// \throw StoreUnavailableError (StoreTimeoutError when it did not answer in time)
+  virtual void probe() = 0;
+  /// The data losses found so far (see StoreLosses).
+  virtual StoreLosses losses() const = 0;
   /// True when other processes use the same store (Redis: a cluster's replicas), so an upload
   /// may be deleted or expire behind this process' back.
   virtual bool shared() const = 0;
@@ -90,10 +108,14 @@ struct StoreOptions {
 std::unique_ptr<UploadStore> open_directory_store(const std::string& path, StoreOptions options);
 
 /// Redis (hiredis): keys PREFIX:upload:ID (a hash of meta and bytes, with Redis' own expiry as
-/// the idle TTL), PREFIX:known:ID and PREFIX:deleted:ID (tell expired and deleted from unknown).
+/// the idle TTL), PREFIX:known:ID and PREFIX:deleted:ID (tell expired and deleted from unknown),
+/// and PREFIX:identity, a random value written when first used and read with every operation:
+/// when it is gone or changed, Redis lost its data (counted in losses()).
 /// Connections are opened on demand and reopened after errors, so Redis may start later or
-/// restart. Redis must not evict keys on its own (that would lose uploads silently): an
-/// evicting maxmemory-policy is refused. \throw std::runtime_error for such a Redis
+/// restart: a pooled connection that Redis closed is dropped before use, and an operation safe to
+/// repeat that fails because its connection was closed is retried once on a new connection.
+/// A timeout throws StoreTimeoutError. Redis must not evict keys on its own (that would lose
+/// uploads silently): an evicting maxmemory-policy is refused. \throw std::runtime_error for such a Redis
 struct RedisAddress {
   std::string host = "127.0.0.1";
   int port = 6379;

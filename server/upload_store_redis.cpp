@@ -1,9 +1,14 @@
 // The Redis backend of UploadStore (server/upload_store.h), with Debian's hiredis (synchronous).
 #include <hiredis/hiredis.h>
+#include <sys/socket.h>
 
+#include <cerrno>
+#include <cstring>
 #include <mutex>
+#include <optional>
 #include <vector>
 
+#include "server/session_cache.h"
 #include "server/upload_store.h"
 
 namespace featureline::server {
@@ -33,11 +38,44 @@ struct Command {
   }
 };
 
+// Why a connection failed: Redis closed it (restarted, killed the client), it did not answer in
+// time (hung, overloaded), or anything else (refused, unresolvable, out of memory).
+struct Failure {
+  enum Kind { closed, timeout, other } kind = other;
+  std::string detail;
+};
+
+// `saved_errno`: errno right after the failing hiredis call (hiredis keeps only its text).
+Failure failure_of(const redisContext* c, int saved_errno) {
+  Failure f{Failure::other, c->errstr};
+  if (c->err == REDIS_ERR_EOF || (c->err == REDIS_ERR_IO && (saved_errno == ECONNRESET || saved_errno == EPIPE)))
+    f.kind = Failure::closed;
+  else if (c->err == REDIS_ERR_IO && (saved_errno == EAGAIN || saved_errno == EWOULDBLOCK || saved_errno == ETIMEDOUT))
+    f.kind = Failure::timeout;
+  return f;
+}
+
+// An idle pooled connection is still usable when nothing is waiting to be read on it: Redis sends
+// nothing unasked, so readable means closed (end of file) or broken.
+bool still_open(const redisContext* c) {
+  char byte = 0;
+  const ssize_t n = recv(c->fd, &byte, 1, MSG_PEEK | MSG_DONTWAIT);
+  return n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK);
+}
+
+// Whether a pipeline may be sent again after its connection was found closed mid-way (Redis may
+// or may not have run it): reads, expiry refreshes and whole transactions may; a DEL whose count
+// decides the answer may not.
+enum class Repeat { safe, never };
+
 class RedisStore final : public UploadStore {
  public:
-  RedisStore(RedisAddress address, StoreOptions options) : address_(std::move(address)), options_(std::move(options)) {
+  RedisStore(RedisAddress address, StoreOptions options)
+      : address_(std::move(address)), options_(std::move(options)), identity_key_(address_.key_prefix + ":identity") {
     try {
       release(connect());  // checks the eviction policy now when Redis is up; later otherwise
+      std::lock_guard<std::mutex> lock(identity_mutex_);
+      identity_ = write_identity();
     } catch (const StoreUnavailableError&) {
       // Redis may start after the server: every operation connects on demand (503 meanwhile).
     }
@@ -49,12 +87,15 @@ class RedisStore final : public UploadStore {
                       known_ttl = std::to_string((options_.idle_ttl + options_.tombstone_ttl).count());
     const std::string key = upload_key(id), known = known_key(id), deleted = deleted_key(id);
     // One transaction: the upload never exists without its expiry (it would never expire).
-    auto replies = run({{"MULTI"},
+    auto replies = run({{"GET", identity_key_},
+                        {"MULTI"},
                         {"HSET", key, "meta", meta, "data", upload.bytes},
                         {"EXPIRE", key, ttl},
                         {"SET", known, "1", "EX", known_ttl},
                         {"DEL", deleted},
-                        {"EXEC"}});
+                        {"EXEC"}},
+                       Repeat::safe);
+    observe_identity(replies[0].get());
     for (const auto& r : replies) {
       if (is_out_of_memory(r.get()))
         throw StoreFullError("the upload store (" + describe() + ") is full: Redis refused the upload at its maxmemory limit");
@@ -69,8 +110,11 @@ class RedisStore final : public UploadStore {
   StoreLookup get(const std::string& id) override {
     StoreLookup found;
     if (!is_mesh_id(id)) return found;
-    auto replies = run({{"HMGET", upload_key(id), "meta", "data"}, {"EXISTS", deleted_key(id)}, {"EXISTS", known_key(id)}});
-    const redisReply* fields = replies[0].get();
+    auto replies = run({{"GET", identity_key_}, {"HMGET", upload_key(id), "meta", "data"}, {"EXISTS", deleted_key(id)},
+                        {"EXISTS", known_key(id)}},
+                       Repeat::safe);
+    observe_identity(replies[0].get());
+    const redisReply* fields = replies[1].get();
     if (is_error(fields) || fields->type != REDIS_REPLY_ARRAY || fields->elements != 2)
       throw StoreUnavailableError("the upload store (" + describe() + ") failed: " + text(fields));
     if (fields->element[0]->type == REDIS_REPLY_STRING && fields->element[1]->type == REDIS_REPLY_STRING) {
@@ -81,9 +125,9 @@ class RedisStore final : public UploadStore {
                                     " bytes instead of " + std::to_string(length) + ")");
       upload.bytes.assign(fields->element[1]->str, fields->element[1]->len);
       found.upload = std::move(upload);
-    } else if (replies[1]->type == REDIS_REPLY_INTEGER && replies[1]->integer == 1) {
-      found.why = StoreMiss::deleted;
     } else if (replies[2]->type == REDIS_REPLY_INTEGER && replies[2]->integer == 1) {
+      found.why = StoreMiss::deleted;
+    } else if (replies[3]->type == REDIS_REPLY_INTEGER && replies[3]->integer == 1) {
       found.why = StoreMiss::expired;  // known, not deleted, and its upload key timed out
     }
     return found;
@@ -91,20 +135,31 @@ class RedisStore final : public UploadStore {
 
   bool touch(const std::string& id) override {
     if (!is_mesh_id(id)) return false;
-    auto replies = run({{"EXPIRE", upload_key(id), std::to_string(options_.idle_ttl.count())},
-                        {"EXPIRE", known_key(id), std::to_string((options_.idle_ttl + options_.tombstone_ttl).count())}});
-    if (replies[0]->type != REDIS_REPLY_INTEGER) throw StoreUnavailableError("the upload store (" + describe() + ") failed: " + text(replies[0].get()));
-    return replies[0]->integer == 1;
+    auto replies = run({{"GET", identity_key_},
+                        {"EXPIRE", upload_key(id), std::to_string(options_.idle_ttl.count())},
+                        {"EXPIRE", known_key(id), std::to_string((options_.idle_ttl + options_.tombstone_ttl).count())}},
+                       Repeat::safe);
+    observe_identity(replies[0].get());
+    if (replies[1]->type != REDIS_REPLY_INTEGER) throw StoreUnavailableError("the upload store (" + describe() + ") failed: " + text(replies[1].get()));
+    return replies[1]->integer == 1;
   }
 
   bool erase(const std::string& id) override {
     if (!is_mesh_id(id)) return false;
-    auto removed = run({{"DEL", upload_key(id)}});
+    // Not repeated: a DEL that ran before its connection closed would answer 0 the second time.
+    auto removed = run({{"DEL", upload_key(id)}}, Repeat::never);
     if (removed[0]->type != REDIS_REPLY_INTEGER || removed[0]->integer == 0) return false;
     // DEL is allowed at maxmemory; the tombstone is small but may be refused then (the 404 would
     // then say "unknown" instead of "deleted": nothing is lost).
-    run({{"DEL", known_key(id)}, {"SET", deleted_key(id), "1", "EX", std::to_string(options_.tombstone_ttl.count())}});
+    run({{"DEL", known_key(id)}, {"SET", deleted_key(id), "1", "EX", std::to_string(options_.tombstone_ttl.count())}}, Repeat::safe);
     return true;
+  }
+
+  void probe() override { observe_identity(run({{"GET", identity_key_}}, Repeat::safe)[0].get()); }
+
+  StoreLosses losses() const override {
+    std::lock_guard<std::mutex> lock(identity_mutex_);
+    return losses_;
   }
 
   std::size_t expire_idle() override { return 0; }  // Redis expires the keys itself
@@ -127,15 +182,23 @@ class RedisStore final : public UploadStore {
   [[noreturn]] void unavailable(const std::string& detail) const {
     throw StoreUnavailableError("the upload store (" + describe() + ") is unreachable: " + detail);
   }
+  [[noreturn]] void fail(const Failure& f) const {
+    if (f.kind == Failure::timeout)
+      throw StoreTimeoutError("the upload store (" + describe() + ") did not answer within " +
+                              std::to_string(address_.timeout.count()) + " ms: " + f.detail);
+    unavailable(f.detail);
+  }
 
   Context connect() const {
     Context c(redisConnectWithTimeout(address_.host.c_str(), address_.port, to_timeval(address_.timeout)));
+    const int saved_errno = errno;
     if (!c) unavailable("out of memory");
-    if (c->err) unavailable(c->errstr);
+    if (c->err) fail(failure_of(c.get(), saved_errno));
     redisSetTimeout(c.get(), to_timeval(address_.timeout));
     auto command = [&](Command cmd) {
       Reply r(static_cast<redisReply*>(redisCommandArgv(c.get(), int(cmd.argv.size()), cmd.argv.data(), cmd.lengths.data())));
-      if (!r) unavailable(c->errstr);
+      const int command_errno = errno;
+      if (!r) fail(failure_of(c.get(), command_errno));
       return r;
     };
     if (address_.db != 0) {
@@ -153,48 +216,118 @@ class RedisStore final : public UploadStore {
     return c;
   }
 
-  Context acquire() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      if (!idle_.empty()) {
-        Context c = std::move(idle_.back());
+  Context connect_for_request() const {
+    try {
+      return connect();
+    } catch (const StoreUnavailableError&) {
+      throw;
+    } catch (const std::runtime_error& e) {
+      throw StoreUnavailableError(e.what());  // a misconfigured Redis found after start: 503, not a crash
+    }
+  }
+
+  // A pooled connection Redis has not closed (one it closed after a restart is dropped here,
+  // before a command is lost on it), else a new one; `reused` says which.
+  Context acquire(bool& reused) {
+    for (;;) {
+      Context c;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (idle_.empty()) break;
+        c = std::move(idle_.back());
         idle_.pop_back();
+      }
+      if (still_open(c.get())) {
+        reused = true;
         return c;
       }
     }
-    try {
-      return connect();
-    } catch (const std::runtime_error& e) {
-      if (dynamic_cast<const StoreUnavailableError*>(&e) != nullptr) throw;
-      throw StoreUnavailableError(e.what());  // a misconfigured Redis found after start: 503, not a crash
-    }
+    reused = false;
+    return connect_for_request();
   }
   void release(Context c) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (idle_.size() < 16) idle_.push_back(std::move(c));
   }
 
-  // Pipelines the commands on one connection and returns every reply. A connection that failed
-  // is dropped (the next call reconnects); Redis' error replies are returned to the caller.
-  std::vector<Reply> run(std::initializer_list<Command> commands) {
-    Context c = acquire();
-    for (const auto& cmd : commands)
-      if (redisAppendCommandArgv(c.get(), int(cmd.argv.size()), const_cast<const char**>(cmd.argv.data()), cmd.lengths.data()) != REDIS_OK)
-        unavailable(c->errstr);
+  // Pipelines the commands on one connection and returns every reply; Redis' error replies are
+  // returned to the caller. A connection that failed is dropped (the next call reconnects). When
+  // a reused connection turns out closed (Redis restarted between the check and the send), a
+  // pipeline that is safe to repeat is sent once more on a new connection.
+  std::vector<Reply> run(std::initializer_list<Command> commands, Repeat repeat) {
+    bool reused = false;
+    Failure failure;
+    if (auto replies = exchange(acquire(reused), commands, failure)) return std::move(*replies);
+    if (!reused || failure.kind != Failure::closed || repeat != Repeat::safe) fail(failure);
+    if (auto replies = exchange(connect_for_request(), commands, failure)) return std::move(*replies);
+    fail(failure);
+  }
+
+  // The replies, with the connection back in the pool; or nothing, with `failure` set.
+  std::optional<std::vector<Reply>> exchange(Context c, std::initializer_list<Command> commands, Failure& failure) {
+    for (const auto& cmd : commands) {
+      if (redisAppendCommandArgv(c.get(), int(cmd.argv.size()), const_cast<const char**>(cmd.argv.data()), cmd.lengths.data()) != REDIS_OK) {
+        failure = failure_of(c.get(), errno);
+        return std::nullopt;
+      }
+    }
     std::vector<Reply> replies;
     for (std::size_t i = 0; i < commands.size(); ++i) {
       void* reply = nullptr;
-      if (redisGetReply(c.get(), &reply) != REDIS_OK || reply == nullptr) unavailable(c->err ? c->errstr : "no reply");
+      if (redisGetReply(c.get(), &reply) != REDIS_OK || reply == nullptr) {
+        const int saved_errno = errno;
+        failure = c->err ? failure_of(c.get(), saved_errno) : Failure{Failure::other, "no reply"};
+        return std::nullopt;
+      }
       replies.emplace_back(static_cast<redisReply*>(reply));
     }
     release(std::move(c));
     return replies;
   }
 
+  // ---- the store's identity --------------------------------------------------------------------
+  // Writes an identity unless one is there, and returns the one now in Redis (perhaps another
+  // replica's): "" when Redis refused to keep it (at maxmemory).
+  std::string write_identity() {
+    auto replies = run({{"SET", identity_key_, random_session_id(), "NX"}, {"GET", identity_key_}}, Repeat::safe);
+    const redisReply* r = replies[1].get();
+    return r->type == REDIS_REPLY_STRING ? std::string(r->str, r->len) : std::string();
+  }
+
+  // Compares the identity read with an operation against the one this process knows: gone or
+  // changed means Redis lost its data since (restarted empty, flushed), which is counted once.
+  void observe_identity(const redisReply* read) {
+    if (read->type != REDIS_REPLY_STRING && read->type != REDIS_REPLY_NIL) return;
+    std::string seen = read->type == REDIS_REPLY_STRING ? std::string(read->str, read->len) : std::string();
+    {
+      std::lock_guard<std::mutex> lock(identity_mutex_);
+      if (!seen.empty() && seen == identity_) return;
+    }
+    if (seen.empty()) {
+      try {
+        seen = write_identity();
+      } catch (const StoreUnavailableError&) {
+        return;  // the next operation looks again
+      }
+    }
+    std::lock_guard<std::mutex> lock(identity_mutex_);
+    // Equal now: a read from before another thread wrote the new identity, counted there.
+    if (seen.empty() || seen == identity_) return;
+    if (!identity_.empty()) {
+      ++losses_.count;
+      losses_.last_unix_s = std::chrono::duration_cast<std::chrono::seconds>(options_.now().time_since_epoch()).count();
+    }
+    identity_ = seen;
+  }
+
   const RedisAddress address_;
   const StoreOptions options_;
+  const std::string identity_key_;
   std::mutex mutex_;
   std::vector<Context> idle_;  // open connections not in use (hiredis contexts are not thread-safe)
+  mutable std::mutex identity_mutex_;  // guards identity_ and losses_
+  std::string identity_;               // the identity this process last saw; "" before the first
+  StoreLosses losses_;
 };
 
 }  // namespace

@@ -4,7 +4,9 @@
 # SIGKILLed and every session still answers with identical lines (its meshes rebuilt from Redis
 # by another replica); the whole cluster restarted and every session answers again; one mesh
 # deleted through the front and 404 "deleted" from every replica; nginx's edge limits (body
-# size, slow headers); down with nothing left running; up --wipe forgets everything.
+# size, slow headers); down with nothing left running; up --wipe forgets everything; nginx's
+# workers not root; a SIGKILLed nginx master's workers stopped by up and down; a port held by
+# another program named and left alone; up with fewer replicas stops the surplus.
 #
 #   SERVER=build/server/featureline-server SHARED=../shared bash tests/integration/cluster_test.sh
 #
@@ -37,14 +39,14 @@ cluster_cleanup() {
 trap cluster_cleanup EXIT
 trap 'exit 130' INT TERM
 
-# A port P with P..P+4 free (nginx, Redis, 3 replicas); bounded tries.
+# A port P with P..P+5 free (nginx, Redis, up to 4 replicas); bounded tries.
 for _ in $(seq 1 50); do
   p=$((20000 + RANDOM % 40000))
   busy=0
-  for q in $(seq "$p" $((p + 4))); do ss -Htln "sport = :$q" | grep -q . && busy=1; done
+  for q in $(seq "$p" $((p + 5))); do ss -Htln "sport = :$q" | grep -q . && busy=1; done
   [ $busy = 0 ] && { CLUSTER_PORT=$p; break; }
 done
-[ -n "$CLUSTER_PORT" ] || { echo "FAIL no block of 5 free loopback ports found"; exit 1; }
+[ -n "$CLUSTER_PORT" ] || { echo "FAIL no block of 6 free loopback ports found"; exit 1; }
 FRONT="http://127.0.0.1:$CLUSTER_PORT"
 echo "# cluster on port $CLUSTER_PORT (time factor $FACTOR), state $STATE"
 
@@ -232,6 +234,76 @@ cluster up --replicas 1 --wipe -- --quiet --threads 1 >"$T/up3.out" 2>&1
 check_eq "up --wipe exits 0" "$?" 0
 http "$T/wiped.json" "$FRONT/v1/meshes/${IDS[2]}"
 check_eq "after --wipe, an old id is unknown (404)" "$STATUS" 404
+http "$T/ready.json" "$FRONT/readyz"
+expect "readyz through nginx" 200 - GET /readyz "$T/ready.json"
+
+# ---- nginx's workers are not root -----------------------------------------------------------------
+nginx_master=$(cluster status | awk '$1 == "nginx" { print $2 }')
+workers=$(ps -o pid= --ppid "$nginx_master" | tr -d ' ')
+worker_users=$(ps -o user= --ppid "$nginx_master" | sort -u | tr -d ' ' | tr '\n' ' ')
+check_eq "nginx runs its 2 workers" "$(echo $workers | wc -w)" 2
+if [ "$(id -u)" = 0 ]; then
+  check_eq "started as root, nginx's workers run as nobody" "$worker_users" "nobody "
+  check "... and their temporary folder is one they can reach (not the state folder)" \
+    grep -q "client_body_temp_path /run/featureline/nginx-$CLUSTER_PORT/client_body;" "$STATE/nginx.conf"
+  big_id=$(curl -s --max-time "$CURL_MAX" --data-binary @"$MESHES/bunny_closed.off" -H 'Content-Type: application/octet-stream' "$FRONT/v1/meshes" | jq -r '.mesh_id // empty')
+  check "an upload over 1 MB (buffered to a temporary file by a worker) goes through" test -n "$big_id"
+else
+  check_eq "nginx's workers run as the user who started the cluster" "$worker_users" "$(id -un) "
+fi
+
+# ---- a SIGKILLed nginx master: its workers are found and stopped by up and down ----------------------
+kill -KILL "$nginx_master"
+for _ in $(seq 1 50); do kill -0 "$nginx_master" 2>/dev/null || break; sleep 0.1; done
+cluster status >"$T/status_orphans" 2>&1
+check_eq "status after the master's SIGKILL: exit 1" "$?" 1
+check_eq "status lists the orphaned workers" "$(awk '$1 == "nginx-orphan" { print $2 }' "$T/status_orphans" | sort -n | tr '\n' ' ')" \
+  "$(echo "$workers" | sort -n | tr '\n' ' ')"
+http "$T/orphan.json" "$FRONT/healthz"
+check_eq "the orphans still hold the front port (they answer)" "$STATUS" 200
+cluster up --replicas 1 -- --quiet --threads 1 >"$T/up_orphans.out" 2>&1
+check_eq "up after the master's SIGKILL stops the orphans and starts nginx again (exit 0)" "$?" 0
+alive=0; for pid in $workers; do kill -0 "$pid" 2>/dev/null && alive=$((alive + 1)); done
+check_eq "... none of the old workers is left" "$alive" 0
+nginx_master=$(cluster status | awk '$1 == "nginx" { print $2 }')
+workers=$(ps -o pid= --ppid "$nginx_master" | tr -d ' ')
+kill -KILL "$nginx_master"
+for _ in $(seq 1 50); do kill -0 "$nginx_master" 2>/dev/null || break; sleep 0.1; done
+cluster down >"$T/down_orphans.out" 2>&1
+check_eq "down after the master's SIGKILL: exit 0" "$?" 0
+alive=0; for pid in $workers; do kill -0 "$pid" 2>/dev/null && alive=$((alive + 1)); done
+check_eq "down stops the orphaned workers" "$alive" 0
+check "down leaves the front port free" bash -c "! ss -Htln 'sport = :$CLUSTER_PORT' | grep -q ."
+
+# ---- a port held by another program: up names it and leaves it alone ---------------------------------
+"$SERVER" --port "$CLUSTER_PORT" --quiet >/dev/null 2>&1 &
+foreign=$!
+BG_PIDS+=($foreign)
+for _ in $(seq 1 50); do curl -s -o /dev/null --max-time 1 "$FRONT/healthz" && break; sleep 0.1; done
+cluster up --replicas 1 -- --quiet --threads 1 >"$T/up_taken.out" 2>&1
+check_eq "up with the front port held by another program: exit 1" "$?" 1
+check "... the error names the port and its holder" grep -q "port $CLUSTER_PORT (nginx) is taken by .*pid=$foreign" "$T/up_taken.out"
+check "... and that program is left running" kill -0 "$foreign"
+kill -TERM "$foreign"; wait "$foreign" 2>/dev/null
+cluster down >/dev/null 2>&1
+
+# ---- up with fewer replicas stops the surplus; status lists every replica started ----------------------
+cluster up --replicas 4 -- --quiet --threads 1 >"$T/up4.out" 2>&1
+check_eq "up --replicas 4: exit 0" "$?" 0
+cluster status >"$T/status4" 2>&1
+check_eq "status lists 4 replicas" "$(awk '$1 == "replica" { print $2 }' "$T/status4" | tr '\n' ' ')" "1 2 3 4 "
+echo 2 >"$STATE/replicas"  # as an interrupted `up --replicas 2` would leave it
+check_eq "status lists every replica with a pid file, beyond the recorded count" \
+  "$(cluster status | awk '$1 == "replica" && $3 != "-" { print $2 }' | tr '\n' ' ')" "1 2 3 4 "
+surplus=$(awk '$1 == "replica" && $2 > 2 { print $3 }' "$T/status4")
+cluster up --replicas 2 -- --quiet --threads 1 >"$T/up2r.out" 2>&1
+check_eq "up --replicas 2 after 4: exit 0" "$?" 0
+alive=0; for pid in $surplus; do kill -0 "$pid" 2>/dev/null && alive=$((alive + 1)); done
+check_eq "replicas 3 and 4 are stopped" "$alive" 0
+check_eq "status lists 2 replicas, both running (exit 0)" "$(cluster status | awk '$1 == "replica" { print $2 }' | tr '\n' ' ')/$(cluster status >/dev/null 2>&1; echo $?)" "1 2 /0"
+busy=0; for q in $((CLUSTER_PORT + 4)) $((CLUSTER_PORT + 5)); do ss -Htln "sport = :$q" | grep -q . && busy=1; done
+check_eq "their ports are free" "$busy" 0
+check "nginx no longer routes to them" bash -c "! grep -qE '127.0.0.1:($((CLUSTER_PORT + 4))|$((CLUSTER_PORT + 5)))' '$STATE/nginx.conf'"
 cluster down >/dev/null 2>&1
 CLUSTER_PORT=""
 

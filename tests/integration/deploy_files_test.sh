@@ -2,7 +2,7 @@
 # What can be checked of docker/ and deploy/ without a Docker engine: the nginx
 # template renders and passes `nginx -t` as the compose file renders it; the compose file and
 # the Kubernetes manifests parse and describe the topology (3 replicas on the Redis store,
-# /healthz probes, hashing on the mesh id, nginx/ingress edge limits); the image is multi-stage
+# liveness and startup on /healthz, readiness on /readyz, hashing on the mesh id, nginx/ingress edge limits); the image is multi-stage
 # and non-root, its build packages are among scripts/setup.sh's, and its runtime packages own
 # every shared library the tested server binary links (ldd + dpkg -S).
 #
@@ -29,6 +29,13 @@ for directive in 'hash $mesh_id consistent' 'client_header_timeout 10s' 'client_
   check "the rendered nginx.conf has: $directive" grep -qF "$directive" "$TMP/nginx/nginx.conf"
 done
 check "no @PLACEHOLDER@ left" bash -c "! grep -q '@[A-Z_]*@' '$TMP/nginx/nginx.conf'"
+if [ "$(id -u)" = 0 ]; then
+  check_eq "rendered as root, the workers' user is nobody (never root)" "$(grep -E '^user ' "$TMP/nginx/nginx.conf")" "user nobody nogroup;"
+fi
+check_eq "NGINX_USER names the workers' user" \
+  "$(NGINX_USER=www-data deploy/render-nginx-conf.sh "$TMP/nginx" 18080 256 127.0.0.1:18081 | grep -E '^user ')" "user www-data;"
+check "NGINX_TEMP moves the workers' temporary files" \
+  bash -c "NGINX_TEMP=/run/x deploy/render-nginx-conf.sh '$TMP/nginx' 18080 256 127.0.0.1:18081 | grep -q 'client_body_temp_path /run/x/client_body;'"
 check "nothing outside the state folder is written (no /var paths)" bash -c "! grep -E '^[^#]*/var/' '$TMP/nginx/nginx.conf'"
 deploy/render-nginx-conf.sh >/dev/null 2>&1
 check_eq "render-nginx-conf.sh without replicas is a usage error" "$?" 2
@@ -47,7 +54,8 @@ fl = services.get("featureline", {})
 need(fl.get("deploy", {}).get("replicas") == 3, "compose: 3 featureline replicas")
 need(fl.get("build", {}).get("dockerfile") == "docker/Dockerfile.server", "compose builds docker/Dockerfile.server")
 need("redis://redis:6379" in fl.get("command", []), "compose replicas use the Redis store")
-need("/healthz" in " ".join(fl.get("healthcheck", {}).get("test", [])), "compose replica healthcheck asks /healthz")
+health = " ".join(fl.get("healthcheck", {}).get("test", []))
+need("/readyz" in health and "' 200 '" in health, "compose replica healthcheck asks /readyz for a 200")
 nginx_cmd = " ".join(services.get("nginx", {}).get("command", []))
 need("render-nginx-conf.sh" in nginx_cmd and "featureline:8080" in nginx_cmd, "compose nginx renders the repository's template")
 need("appendonly" not in " ".join(services.get("redis", {}).get("command", [])) and
@@ -62,8 +70,12 @@ for d in docs:
     if d["kind"] == "Deployment":
         need(d["spec"]["replicas"] >= 2, "kubernetes: several replicas")
         c = d["spec"]["template"]["spec"]["containers"][0]
-        for probe in ("livenessProbe", "readinessProbe"):
-            need(c.get(probe, {}).get("httpGet", {}).get("path") == "/healthz", "kubernetes: %s on /healthz" % probe)
+        for probe, path in (("startupProbe", "/healthz"), ("livenessProbe", "/healthz"), ("readinessProbe", "/readyz")):
+            need(c.get(probe, {}).get("httpGet", {}).get("path") == path, "kubernetes: %s on %s" % (probe, path))
+        # The readiness probe waits for /readyz's own store probe (2 s Redis timeout).
+        need(c.get("readinessProbe", {}).get("timeoutSeconds", 1) > 2, "kubernetes: readiness timeout above the store's 2 s")
+        startup = c.get("startupProbe", {})
+        need(startup.get("periodSeconds", 10) * startup.get("failureThreshold", 3) >= 30, "kubernetes: the startup probe allows 30 s")
         need("redis://redis:6379" in c.get("args", []), "kubernetes replicas use the Redis store")
         need(d["spec"]["template"]["spec"]["securityContext"].get("runAsNonRoot") is True, "kubernetes: non-root pods")
     if d["kind"] == "Ingress":

@@ -3,7 +3,10 @@
 # restarted with the same --data-dir it keeps its sessions (identical lines) and remembers
 # deletes; eviction costs a rebuild, not the session; a full store (--store-max-mb) and an
 # unreachable Redis answer 503 with their codes and keep nothing; idle uploads expire from the
-# store and the 404 says so, also after a restart.
+# store and the 404 says so, also after a restart. With a real redis-server: a restart
+# leaves no request failing on a stale pooled connection; a Redis restarted empty makes sessions
+# answer 404 "lost by the upload store" (not "deleted"); a SIGSTOPped Redis opens the circuit
+# breaker (cached sessions answer, uploads fail at once); /readyz follows the store.
 #
 #   SERVER=build/server/featureline-server SHARED=../shared bash tests/integration/store_test.sh
 #
@@ -123,7 +126,116 @@ http "$T/nr.json" "${SRV_BASE[noredis]}/v1/meshes/0123456789abcdef0123456789abcd
 expect "a lookup that needs Redis while it is unreachable" 503 storage_unavailable GET /v1/meshes/0123456789abcdef0123456789abcdef "$T/nr.json"
 http "$T/nrh.json" "${SRV_BASE[noredis]}/healthz"
 check_eq "the server itself stays up (healthz 200)" "$STATUS" 200
+http "$T/nrr.json" "${SRV_BASE[noredis]}/readyz"
+expect "but it is not ready (readyz)" 503 storage_unavailable GET /readyz "$T/nrr.json"
 stop_server noredis
+
+# ---- Redis restarted, restarted empty, hung: readiness, no stale-connection 503s, "lost", the breaker -----
+REDIS_PID=""
+start_redis() {  # start_redis DATA_DIR: on $REDIS_PORT, append-only file in DATA_DIR; sets REDIS_PID
+  mkdir -p "$1"
+  redis-server --port "$REDIS_PORT" --bind 127.0.0.1 --dir "$1" --appendonly yes --appendfsync always --save "" \
+    --maxmemory-policy noeviction --loglevel warning >>"$T/redis.log" 2>&1 &
+  REDIS_PID=$!
+  for _ in $(seq 1 100); do redis-cli -p "$REDIS_PORT" ping 2>/dev/null | grep -q PONG && return 0; sleep 0.1; done
+  fail "redis-server starts on port $REDIS_PORT" "$(tail -n 5 "$T/redis.log")"
+  return 1
+}
+stop_redis() {  # SIGCONT first: a stopped Redis would not act on SIGTERM
+  [ -n "$REDIS_PID" ] || return 0
+  kill -CONT "$REDIS_PID" 2>/dev/null
+  stop_pids 50 "$REDIS_PID"
+  wait "$REDIS_PID" 2>/dev/null
+  REDIS_PID=""
+}
+store_cleanup() { stop_redis; cleanup; }
+trap store_cleanup EXIT
+readyz() {  # readyz SERVER_NAME OUT: sets STATUS
+  http "$2" "${SRV_BASE[$1]}/readyz"
+}
+REDIS_PORT=""
+for _ in $(seq 1 50); do p=$((20000 + RANDOM % 40000)); ss -Htln "sport = :$p" | grep -q . || { REDIS_PORT=$p; break; }; done
+
+start_server memonly --quiet || exit 1
+readyz memonly "$T/rz_mem.json"
+expect "readyz without a store" 200 - GET /readyz "$T/rz_mem.json"
+check_eq "... names no store" "$(jq -c '[.status, .store]' "$T/rz_mem.json")" '["ready",null]'
+stop_server memonly
+
+start_redis "$T/redis-a" || exit 1
+start_server rs --store "redis://127.0.0.1:$REDIS_PORT" || exit 1
+readyz rs "$T/rz1.json"
+expect "readyz with Redis up" 200 - GET /readyz "$T/rz1.json"
+check_eq "... names the store and no data loss" "$(jq -c '[.store, .store_data_losses]' "$T/rz1.json")" "[\"redis 127.0.0.1:$REDIS_PORT/0\",0]"
+# Concurrent uploads leave several connections in the server's pool.
+for i in 1 2 3 4 5 6; do
+  curl -s -o "$T/par$i.json" -w '%{http_code}' --max-time "$CURL_MAX" --data-binary @samples/ridge_field.off \
+    -H 'Content-Type: application/octet-stream' "${SRV_BASE[rs]}/v1/meshes" >"$T/par$i.code" &
+  BG_PIDS+=($!)
+done
+wait "${BG_PIDS[@]}" 2>/dev/null
+check_eq "6 concurrent uploads: 201 each" "$(cat "$T"/par?.code | tr -d '\n')" "201201201201201201"
+KEPT=$(jq -r .mesh_id "$T/par1.json")
+line rs "$KEPT" '[701, 963, 1184]'; KEPT_LINE=$LINE
+
+# Restarted with its data (append-only file): the pooled connections are dead, nothing may fail.
+stop_redis; start_redis "$T/redis-a" || exit 1
+codes=""
+for i in 1 2 3 4 5 6 7 8; do upload rs samples/ridge_field.off; codes="$codes$STATUS "; done
+check_eq "after a Redis restart, 8 uploads in a row: 201 each (no 503 from stale connections)" "$codes" "201 201 201 201 201 201 201 201 "
+check_eq "no request failed: no 503 in the access log" "$(grep -c ' 503 ' "$T/rs.log")" 0
+line rs "$KEPT" '[701, 963, 1184]'
+check_eq "a session from before the restart answers, identical" "$STATUS/$LINE" "200/$KEPT_LINE"
+readyz rs "$T/rz2.json"
+check_eq "a restart that kept the data is no data loss" "$(jq .store_data_losses "$T/rz2.json")" 0
+
+# Restarted empty: the sessions are lost by the store, not deleted; new uploads work.
+stop_redis; start_redis "$T/redis-empty" || exit 1
+http "$T/lost1.json" "${SRV_BASE[rs]}/v1/meshes/$KEPT"
+expect "a session whose upload Redis lost" 404 not_found GET "/v1/meshes/$KEPT" "$T/lost1.json"
+check "... says the store lost it and to upload again (not 'deleted')" grep -q "was lost by the upload store.*upload it again" "$T/lost1.json"
+line rs "$KEPT" '[701, 963, 1184]'
+check "a line on it afterwards: the same 404 reason" grep -q "was lost by the upload store" "$T/line.json"
+http "$T/lost2.json" "${SRV_BASE[rs]}/v1/meshes/0123456789abcdef0123456789abcdef"
+check "an id this replica never had: 404 that says the store lost its data" grep -q "no mesh with id.*lost its data" "$T/lost2.json"
+readyz rs "$T/rz3.json"
+expect "readyz after the data loss" 200 - GET /readyz "$T/rz3.json"
+check_eq "... counts one data loss and says when" "$(jq -c '[.store_data_losses, (.store_last_data_loss | test("^20[0-9-]+T[0-9:]+Z$"))]' "$T/rz3.json")" "[1,true]"
+check_eq "... and so does /metrics" "$(metric rs featureline_store_data_losses_total)" 1
+upload rs samples/ridge_field.off; AFTER=$ID
+check_eq "an upload after the loss: 201" "$STATUS" 201
+
+# Hung (SIGSTOP): the breaker opens after consecutive timeouts; the cached session keeps answering,
+# uploads fail at once with 503, readiness says not ready; after SIGCONT the probe closes it.
+line rs "$AFTER" '[701, 963, 1184]'; AFTER_LINE=$LINE
+kill -STOP "$REDIS_PID"
+for _ in $(seq 1 10); do
+  line rs "$AFTER" '[701, 963, 1184]'
+  [ "$(metric rs featureline_store_breaker_open)" = 1 ] && break
+done
+check_eq "the breaker opened while Redis is stopped" "$(metric rs featureline_store_breaker_open)" 1
+lines_ok=0
+for _ in $(seq 1 20); do line rs "$AFTER" '[701, 963, 1184]'; [ "$STATUS/$LINE" = "200/$AFTER_LINE" ] && lines_ok=$((lines_ok + 1)); done
+check_eq "with the breaker open, 20 lines on the cached session: 200 and identical" "$lines_ok" 20
+upload rs samples/ridge_field.off
+expect "an upload with the breaker open" 503 storage_unavailable POST /v1/meshes "$T/up.json"
+check "... fails at once, without waiting for Redis (says so)" grep -q "fail at once" "$T/up.json"
+check "... with Retry-After" test -n "$(header "$T/up.json" Retry-After)"
+readyz rs "$T/rz4.json"
+expect "readyz with the breaker open" 503 storage_unavailable GET /readyz "$T/rz4.json"
+http "$T/hz_open.json" "${SRV_BASE[rs]}/healthz"
+check_eq "healthz (liveness) stays 200" "$STATUS" 200
+kill -CONT "$REDIS_PID"
+for _ in $(seq 1 $((30 * FACTOR))); do readyz rs "$T/rz5.json"; [ "$STATUS" = 200 ] && break; sleep 0.2; done
+check_eq "after SIGCONT the probe closes the breaker: readyz 200" "$STATUS" 200
+upload rs samples/ridge_field.off
+check_eq "... and uploads work again" "$STATUS" 201
+
+# Redis gone: not ready.
+stop_redis
+readyz rs "$T/rz6.json"
+expect "readyz with Redis down" 503 storage_unavailable GET /readyz "$T/rz6.json"
+stop_server rs
 
 # ---- idle uploads expire from the store; the 404 says so, also after a restart ----------------------------
 start_server ttl --data-dir "$T/data4" --ttl-s 2 --quiet || exit 1

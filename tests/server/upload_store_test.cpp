@@ -19,6 +19,7 @@
 #include "engine/errors.h"
 #include "engine/prepared_mesh.h"
 #include "server/session_cache.h"
+#include "server/store_breaker.h"
 #include "server/upload_store.h"
 #include "tests/support/synthetic_meshes.h"
 
@@ -218,6 +219,7 @@ class RedisProcess {
   ~RedisProcess() { stop(); }
   void stop() {
     if (pid_ <= 0) return;
+    kill(pid_, SIGCONT);
     kill(pid_, SIGTERM);
     int status = 0;
     for (int i = 0; i < 100 && waitpid(pid_, &status, WNOHANG) == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -229,6 +231,9 @@ class RedisProcess {
   }
   bool up() const { return pid_ > 0 && port_answers(port_); }
   int port() const { return port_; }
+  // A hung Redis: the kernel still accepts connections and takes commands, nothing answers.
+  void pause() const { kill(pid_, SIGSTOP); }
+  void resume() const { kill(pid_, SIGCONT); }
 
  private:
   int port_;
@@ -314,6 +319,66 @@ TEST(RedisStore, UnreachableIsUnavailableAndReconnectsWhenRedisReturns) {
   RedisProcess again("noeviction", port);
   ASSERT_TRUE(again.up());
   EXPECT_EQ(store->get(kId).why, StoreMiss::unknown);  // a new, empty Redis: reconnected
+}
+
+// Pooled connections that Redis closed when it restarted are dropped before use: no operation
+// after the restart fails (before, the first few per replica answered 503, one per stale connection).
+TEST(RedisStore, ConnectionsClosedByARestartAreReplacedNotFailed) {
+  const int port = free_loopback_port();
+  auto store = open_redis_store(address_of(port), {});
+  {
+    RedisProcess redis("noeviction", port);
+    ASSERT_TRUE(redis.up());
+    std::vector<std::thread> threads;  // concurrent operations leave several connections in the pool
+    for (int i = 0; i < 6; ++i) threads.emplace_back([&] { store->put(kId, upload_of("x")); });
+    for (auto& t : threads) t.join();
+  }
+  RedisProcess again("noeviction", port);
+  ASSERT_TRUE(again.up());
+  int failures = 0;
+  for (int i = 0; i < 10; ++i) {
+    try {
+      store->put(kOtherId, upload_of("y"));
+      store->get(kOtherId);
+    } catch (const StoreUnavailableError&) {
+      ++failures;
+    }
+  }
+  EXPECT_EQ(failures, 0);
+  EXPECT_TRUE(store->get(kOtherId).upload.has_value());
+}
+
+// Redis restarted without its data: every replica that knew it counts one loss, once; a replica
+// that starts afterwards knows nothing lost; a restart that keeps the data is no loss.
+TEST(RedisStore, ARedisThatLostItsDataIsCountedOnceByEveryReplicaThatKnewIt) {
+  const int port = free_loopback_port();
+  FakeWallClock clock;
+  StoreOptions options;
+  options.now = clock.fn();
+  std::unique_ptr<UploadStore> replica_a, replica_b;
+  {
+    RedisProcess redis("noeviction", port);
+    ASSERT_TRUE(redis.up());
+    replica_a = open_redis_store(address_of(port), options);
+    replica_b = open_redis_store(address_of(port), options);
+    replica_a->put(kId, upload_of("x"));
+    replica_b->probe();
+    EXPECT_EQ(replica_a->losses().count, 0u);
+  }
+  RedisProcess empty("noeviction", port);
+  ASSERT_TRUE(empty.up());
+  clock.now += std::chrono::seconds(100);
+  EXPECT_EQ(replica_a->get(kId).why, StoreMiss::unknown);
+  EXPECT_EQ(replica_a->losses().count, 1u);
+  EXPECT_EQ(replica_a->losses().last_unix_s, 1764576100);
+  replica_a->get(kId);
+  replica_a->put(kOtherId, upload_of("y"));
+  EXPECT_EQ(replica_a->losses().count, 1u);  // once, however often it is seen
+  EXPECT_FALSE(replica_b->touch(kId));
+  EXPECT_EQ(replica_b->losses().count, 1u);
+  auto started_after = open_redis_store(address_of(port), options);
+  EXPECT_TRUE(started_after->get(kOtherId).upload.has_value());
+  EXPECT_EQ(started_after->losses().count, 0u);
 }
 
 TEST(RedisStore, RefusesARedisThatEvictsKeys) {
@@ -439,6 +504,70 @@ TEST(DurableSessions, ADeleteOnOneReplicaReachesAnotherReplicasCache) {
   EXPECT_EQ(found.session, nullptr);
   EXPECT_EQ(found.why, DurableSessions::Gone::deleted);
   EXPECT_EQ(cache_b.stats().entries, 0u);
+}
+
+// Redis restarted empty: a session cached on a replica is reported lost by the store (not
+// deleted), on every replica and on every later request; an id the replica never had says the
+// store lost its data; new uploads work at once.
+TEST(DurableSessions, ASessionWhoseUploadRedisLostIsReportedLostNotDeleted) {
+  const int port = free_loopback_port();
+  Rebuilds rebuilds;
+  SessionCache cache_a({1 << 20, std::chrono::seconds(60)}), cache_b({1 << 20, std::chrono::seconds(60)});
+  std::string id;
+  auto redis = std::make_unique<RedisProcess>("noeviction", port);
+  ASSERT_TRUE(redis->up());
+  DurableSessions replica_a(cache_a, open_redis_store(address_of(port), {}), rebuilds.fn(), {});
+  DurableSessions replica_b(cache_b, open_redis_store(address_of(port), {}), rebuilds.fn(), {});
+  id = (*replica_a.create(fresh_session(10), upload_of("x")))->id;
+  ASSERT_TRUE(replica_b.find(id).rebuilt);
+  redis.reset();
+  redis = std::make_unique<RedisProcess>("noeviction", port);  // restarted, empty
+  ASSERT_TRUE(redis->up());
+  EXPECT_EQ(replica_a.find(id).why, DurableSessions::Gone::lost);
+  EXPECT_EQ(replica_a.find(id).why, DurableSessions::Gone::lost);  // remembered once dropped
+  EXPECT_EQ(replica_b.find(id).why, DurableSessions::Gone::lost);
+  EXPECT_EQ(replica_a.find(kOtherId).why, DurableSessions::Gone::unknown_after_loss);
+  const auto fresh = (*replica_a.create(fresh_session(10), upload_of("y")))->id;
+  EXPECT_NE(replica_b.find(fresh).session, nullptr);
+  ASSERT_TRUE(replica_a.erase(fresh, nullptr));
+  EXPECT_EQ(replica_b.find(fresh).why, DurableSessions::Gone::deleted);  // a delete is still a delete
+}
+
+// Redis stopped (SIGSTOP): after consecutive timeouts the breaker opens; cached sessions answer
+// without the store, everything that needs the store fails at once (not with a timeout), and
+// the breaker closes by itself once Redis answers its probe.
+TEST(StoreBreaker, OpensAfterTimeoutsServesTheCacheAndClosesWhenTheStoreAnswers) {
+  RedisProcess redis;
+  ASSERT_TRUE(redis.up());
+  Rebuilds rebuilds;
+  SessionCache cache({1 << 20, std::chrono::seconds(60)});
+  auto breaker_owned = std::make_unique<StoreBreaker>(open_redis_store(address_of(redis.port()), {}),
+                                                      BreakerOptions{2, std::chrono::milliseconds(100)});
+  StoreBreaker& breaker = *breaker_owned;
+  DurableSessions sessions(cache, std::move(breaker_owned), rebuilds.fn(), {});
+  const auto id = (*sessions.create(fresh_session(10), upload_of("x")))->id;
+  redis.pause();
+  EXPECT_THROW(sessions.find(kOtherId), StoreTimeoutError);
+  EXPECT_FALSE(breaker.open());
+  EXPECT_NE(sessions.find(id).session, nullptr);  // its refresh timed out: the second in a row
+  ASSERT_TRUE(breaker.open());
+  EXPECT_EQ(breaker.openings(), 1u);
+  for (int i = 0; i < 3; ++i) EXPECT_NE(sessions.find(id).session, nullptr);
+  try {
+    sessions.find(kOtherId);
+    ADD_FAILURE() << "a lookup that needs the store answered while the breaker is open";
+  } catch (const StoreTimeoutError& e) {
+    ADD_FAILURE() << "waited for the store: " << e.what();
+  } catch (const StoreUnavailableError& e) {
+    EXPECT_NE(std::string(e.what()).find("fail at once"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(sessions.create(fresh_session(10), upload_of("y")), StoreUnavailableError);
+  EXPECT_EQ(cache.stats().entries, 1u);
+  redis.resume();
+  for (int i = 0; i < 100 && breaker.open(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_FALSE(breaker.open());
+  EXPECT_EQ(sessions.find(kOtherId).why, DurableSessions::Gone::unknown);
+  EXPECT_NE(sessions.find(id).session, nullptr);
 }
 
 TEST(DurableSessions, AStoreThatRefusesLeavesNoSession) {
