@@ -91,6 +91,18 @@ chain_length=$(jq '.crease_chains[0].length' "$tmp/features.json")
 "$FEATURELINE" detect "$mesh" --keys "$ends" >"$tmp/chain-line.json"; rc=$?
 check "a line through the longest chain's ends and middle follows it (length within 1%)" \
   [ "$(jq --argjson c "$chain_length" '((.refined.length - $c) / $c) | fabs < 0.01' "$tmp/chain-line.json")" = true ]
+# One key on the longest chain's middle: --trace follows the chain (at least as long as it: the
+# trace also passes the chain's corners that the features command splits at).
+middle=$(jq -r '.crease_chains[0].vertices as $v | $v[($v|length)/2|floor]' "$tmp/features.json")
+"$FEATURELINE" detect "$mesh" --keys "$middle" --trace >"$tmp/traced.json"; rc=$?
+check "--trace from the longest chain's middle exits 0" [ $rc = 0 ]
+check "--trace: a traced line along creases at least as long as the chain" \
+  [ "$(jq --argjson c "$chain_length" '.initial.method == "trace" and .trace.on_crease and .initial.length >= $c - 1e-9' "$tmp/traced.json")" = true ]
+"$FEATURELINE" detect "$mesh" --keys "$middle" --trace --closed >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "--trace with --closed is a usage error (exit 2)" [ $rc = 2 ]
+"$FEATURELINE" detect "$mesh" --keys "$middle" --trace --trace-sign valley >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "--trace-sign valley beside a convex crease follows the valley nearby" \
+  [ "$rc $(jq -r .trace.sign "$tmp/out")" = "0 valley" ]
 "$FEATURELINE" features "$mesh" --max-chains 5 --max-seeds 0 >"$tmp/f5.json"; rc=$?
 check "--max-chains 5 gives 5 chains" [ "$(jq '.crease_chains|length' "$tmp/f5.json")" = 5 ]
 "$FEATURELINE" features "$mesh" --corner-angle 200 >"$tmp/out" 2>"$tmp/err"; rc=$?

@@ -191,6 +191,36 @@ expect "closed loop 10,200,400" 200 - POST "$FL" "$T/l4.json"
 check_eq "closed true echoed" "$(jq .closed "$T/l4.json")" true
 check_eq "closed loop's initial line passes every key" "$(jq '.initial.vertices as $v | [10, 200, 400] | all(. as $k | $v | index($k) != null)' "$T/l4.json")" true
 
+# One key traced: fandisk's vertex 2000 lies on a convex crease chain of 66 edges that ends at a
+# junction of three creases at each end (vertices 1537 and 1267).
+echo '{"keys": [2000], "trace": true}' >"$T/t1.json"
+validate_request "traced request matches the contract" POST "$FL" "$T/t1.json"
+lines "$T/lt1.json" "$T/t1.json"
+expect "line traced from key 2000" 200 - POST "$FL" "$T/lt1.json"
+check_eq "traced: the crease chain between two junctions" \
+  "$(jq -c '[.closed, (.initial.vertices | length), .initial.method, .trace.sign, .trace.on_crease, [.trace.ends[].reason], .keys]' "$T/lt1.json")" \
+  '[false,67,"trace","ridge",true,["junction","junction"],[1537,1267]]'
+check_eq "traced: both junctions reported, not followed" "$(jq -c '[.trace.junctions[] | [.vertex, .branches, .followed]] | sort' "$T/lt1.json")" \
+  '[[1267,3,false],[1537,3,false]]'
+echo '{"keys": [2000, 2001], "trace": true}' >"$T/t2.json"
+lines "$T/lt2.json" "$T/t2.json"
+expect "trace from two keys" 400 invalid_request POST "$FL" "$T/lt2.json"
+check "... saying a trace starts from one key" grep -q 'exactly one key' "$T/lt2.json"
+echo '{"keys": [2000], "trace": "yes"}' >"$T/t3.json"
+lines "$T/lt3.json" "$T/t3.json"
+expect "trace not a boolean" 400 invalid_request POST "$FL" "$T/lt3.json"
+echo '{"keys": [100], "trace": true}' >"$T/t4.json"
+lines "$T/lt4.json" "$T/t4.json"
+expect "trace on a flat face" 422 unprocessable_geometry POST "$FL" "$T/lt4.json"
+check "... saying there is nothing to trace" grep -q 'no ridge, valley or crease to trace at vertex' "$T/lt4.json"
+echo '{"keys": [2000], "trace": true, "options": {"trace": {"max_edges": 10, "step": 11}}}' >"$T/t5.json"
+lines "$T/lt5.json" "$T/t5.json"
+expect "trace option out of range" 400 invalid_request POST "$FL" "$T/lt5.json"
+check "... naming options.trace.step" grep -q 'options.trace.step' "$T/lt5.json"
+QUERY='?format=glb' lines "$T/gt1.glb" "$T/t1.json"
+check_eq "traced line as GLB: 200" "$STATUS" 200
+validate_gltf "traced line as GLB: passes the glTF validator" "$T/gt1.glb"
+
 is_glb() { [ "$(head -c 4 "$1")" = glTF ]; }
 QUERY='?format=glb' lines "$T/g1.glb" "$T/r1.json"
 check_eq "?format=glb: 200" "$STATUS" 200
