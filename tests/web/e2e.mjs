@@ -52,7 +52,7 @@ async function run() {
 
   let s;
   // ---- the page loads, the sample list comes from the build ----------------------------
-  const response = await page.goto(`${base}/`);
+  const response = await page.goto(`${base}/?trace=0`);
   check(response && response.status() === 200, 'GET / serves the page', () => `status ${response?.status()}`);
   await until('the app to start', () => page.evaluate(() => !!window.featureline && window.featureline.samples.length > 0));
   const samples = await page.evaluate(() => window.featureline.samples);

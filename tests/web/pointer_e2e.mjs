@@ -31,7 +31,7 @@ const median = (xs) => [...xs].sort((a, b) => a - b)[Math.floor(xs.length / 2)];
 await h.run(async () => {
   await h.startServer();
   const page = await h.launch({ width: 1280, height: 800 }, { hasTouch: true });
-  await page.goto(`${h.base}/`);
+  await page.goto(`${h.base}/?trace=0`);
   await page.waitForFunction(() => window.featureline);
   const state = () => page.evaluate(() => ({ mesh: window.featureline.mesh, lines: window.featureline.lines.map((l) => ({ keys: l.keys })) }));
   const screenOf = (v) => page.evaluate((vv) => window.featureline.screenPositionOfVertex(vv), v);

@@ -80,7 +80,7 @@ await h.run(async () => {
   // ---- a tall narrow window: the panel is a drawer, the sample is framed whole ---------------
   const page = await h.launch({ width: 800, height: 1000 });
   const a = api(page);
-  await page.goto(`${base}/`);
+  await page.goto(`${base}/?trace=0`);
   await until('the app to start', () => page.evaluate(() => !!window.featureline && window.featureline.samples.length > 0));
 
   // "+ Line" before any mesh: a message, no undo step.
@@ -326,7 +326,7 @@ await h.run(async () => {
   const page2 = await h.context.newPage();
   h.watch(page2);
   await page2.setViewportSize({ width: 1280, height: 800 });
-  await page2.goto(`${base}/`);
+  await page2.goto(`${base}/?trace=0`);
   await until('the second page to start', () => page2.evaluate(() => !!window.featureline && window.featureline.samples.length > 0));
   await page2.setInputFiles('#session-input', sessionPath);
   await until('the session to load', async () => (await api(page2).state()).lines.length === 2, 20000);

@@ -94,7 +94,7 @@ await h.run(async () => {
   ok('the server starts on 127.0.0.1');
   const page = await h.launch({ width: 1280, height: 800 });
   const a = api(page);
-  await page.goto(`${base}/`);
+  await page.goto(`${base}/?trace=0`);
   await until('the app to start', () => page.evaluate(() => !!window.featureline && window.featureline.samples.length > 0));
   const sample = (await page.evaluate(() => window.featureline.samples)).find((s) => s.file === 'samples/ridge_field.off');
   await openSample(page, a);
@@ -384,7 +384,7 @@ await h.run(async () => {
   const page2 = await h.context.newPage();
   h.watch(page2);
   const a2 = api(page2);
-  await page2.goto(`${base}/`);
+  await page2.goto(`${base}/?trace=0`);
   await until('the second page to start', () => page2.evaluate(() => !!window.featureline && window.featureline.samples.length > 0));
   await page2.setInputFiles('#session-input', sessionPath);
   await until('the session to load', async () => (await a2.state()).lines.length === original.length);

@@ -39,6 +39,8 @@ export const state = {
   uploadProgress: null, // the last upload progress event {loaded, total}
   download: null, // {received, total, wireBytes, encoding} of the last mesh download
   snapping: true,
+  // A click traces the whole feature (trace.js); ?trace=0 opens the page in key mode.
+  traceMode: new URLSearchParams(globalThis.location?.search ?? '').get('trace') !== '0',
   selectedKey: null, // {lineId, keyIndex}
   pendingSession: null, // a loaded session waiting for its mesh file
   lastClickAdd: null, // {time, before}: the last key placed by a click (a double-click takes it back)

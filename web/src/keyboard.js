@@ -4,6 +4,7 @@ import { activeLine, addLine, afterEdit, deleteSelectedKey, redo, restore, setCl
 import { saveSession } from './open_mesh.js';
 import { refresh } from './panel.js';
 import { pointer } from './picking.js';
+import { setTraceMode } from './trace.js';
 
 // ---- keyboard -----------------------------------------------------------------------------------------------
 export function typingInField(e) {
@@ -60,6 +61,7 @@ export function onKeyDown(e) {
     n: addLine,
     c: () => setClosed(!activeLine()?.closed),
     s: () => setSnapping(!state.snapping),
+    t: () => setTraceMode(!state.traceMode),
     f: () => viewer.fitView(),
     1: () => lookFrom('front'),
     2: () => lookFrom('top'),

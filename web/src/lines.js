@@ -16,7 +16,7 @@ export let idleWaiters = [];
 // What undo restores: the lines with their keys, which one is active, and the options.
 export function snapshot() {
   return {
-    lines: state.lines.map((l) => ({ id: l.id, name: l.name, keys: [...l.keys], closed: l.closed })),
+    lines: state.lines.map((l) => ({ id: l.id, name: l.name, keys: [...l.keys], closed: l.closed, trace: l.trace })),
     activeLineId: state.activeLineId,
     nextLineId: state.nextLineId,
     options: structuredClone(state.options),
@@ -29,6 +29,7 @@ export function restore(snap) {
     const line = newLine(s.id, s.name);
     line.keys = [...s.keys];
     line.closed = s.closed;
+    line.trace = !!s.trace;
     const before = old.get(s.id);
     if (before?.result) {
       line.result = before.result; // drawn as out of date until the answer for these keys is in
@@ -94,6 +95,7 @@ export function newLine(id, name) {
     name: name ?? `Line ${id}`,
     keys: [],
     closed: false,
+    trace: false, // one key, the whole feature through it (trace.js)
     result: null, // the last answer (possibly for earlier keys: then drawn as out of date)
     resultKey: null, // the request the result answers
     error: '',
@@ -149,8 +151,10 @@ export function setActiveLine(id) {
   refresh();
 }
 
-// Whether keys can go to the server: at least two, consecutive ones distinct (1-based).
+// Whether keys can go to the server: at least two, consecutive ones distinct (1-based); a
+// traced line has exactly one.
 export function keysProblem(line) {
+  if (line.trace) return line.keys.length === 1 ? '' : 'a traced line has one key';
   if (line.keys.length < 2) return 'place at least two keys';
   for (let i = 1; i < line.keys.length; ++i) if (line.keys[i] === line.keys[i - 1]) return `keys ${i} and ${i + 1} are the same vertex`;
   return '';
@@ -163,12 +167,32 @@ export function canUseVertex(line, index, v) {
   return v !== prev && v !== next;
 }
 
+// A traced line becomes an ordinary keyed line (to add keys by hand): its ends, and vertices
+// along it so the keyed line keeps the traced route (a loop needs three keys).
+export function keysAlongTrace(result) {
+  const v = result.initial.vertices;
+  const n = v.length;
+  const picks = result.closed ? [0, Math.floor(n / 3), Math.floor((2 * n) / 3)] : [0, Math.floor(n / 2), n - 1];
+  return picks.map((i) => v[i]).filter((k, i, all) => i === 0 || k !== all[i - 1]);
+}
+
+function untrace(line) {
+  if (!line.trace) return;
+  const current = line.result && !isStale(line);
+  line.trace = false;
+  if (current) {
+    line.keys = keysAlongTrace(line.result);
+    line.closed = line.result.closed;
+  }
+}
+
 export function addKey(vertex) {
   const line = activeLine();
   if (!line || !state.mesh) return false;
-  if (line.keys.length && line.keys[line.keys.length - 1] === vertex) return false;
-  const added = edit('add key', () => {
-    line.keys.push(vertex);
+  if (line.keys.length && line.keys[line.keys.length - 1] === vertex && !line.trace) return false;
+  const added = edit(line.trace ? 'add a key to a traced line' : 'add key', () => {
+    untrace(line);
+    if (line.keys[line.keys.length - 1] !== vertex) line.keys.push(vertex);
     state.selectedKey = { lineId: line.id, keyIndex: line.keys.length - 1 };
   });
   return added;
@@ -216,6 +240,7 @@ export function setClosed(closed) {
   if (!line) return showMessage('Open a mesh first: there is no line to close.', { error: true });
   if (line.closed === closed) return;
   edit(closed ? `close ${line.name}` : `open ${line.name}`, () => {
+    untrace(line);
     line.closed = closed;
   });
   const few = closed && line.keys.length < 3 ? ` (a loop needs at least 3 keys; it has ${line.keys.length})` : '';
@@ -233,7 +258,7 @@ export function clearKeys() {
 }
 
 export function lineRequest(line) {
-  const body = { keys: [...line.keys], closed: line.closed };
+  const body = line.trace ? { keys: [...line.keys], trace: true } : { keys: [...line.keys], closed: line.closed };
   if (Object.keys(state.options).length) body.options = structuredClone(state.options);
   return body;
 }
@@ -332,7 +357,7 @@ export function retryNotice(what, { error, attempt, delayS }) {
 }
 
 export function isIdle() {
-  return !state.inFlight && !state.loading && !state.recovering && !state.lines.some(needsRequest);
+  return !state.inFlight && !state.loading && !state.recovering && !state.pendingTraces && !state.lines.some(needsRequest);
 }
 
 export function settleIdle() {

@@ -12,6 +12,7 @@ import { loadOptionTables, optionsChanged } from './options_panel.js';
 import { applyColors, refresh, setUpAxis } from './panel.js';
 import { hoverFeedback, onDoubleClick, onPointerDown, onPointerMove, onPointerUp, pointer } from './picking.js';
 import { decompose, segmentationStale } from './segmentation_panel.js';
+import { clearTracePreview, setTraceMode } from './trace.js';
 
 // ---- wiring ------------------------------------------------------------------------------------------------
 function wire() {
@@ -22,6 +23,7 @@ function wire() {
   host.addEventListener('pointerleave', () => {
     $('readout').hidden = true;
     viewer.setSnapPreview(null);
+    clearTracePreview();
     if (pointer.drag || !viewer.hoverKey) return;
     viewer.hoverKey = null;
     viewer.canvas.style.cursor = '';
@@ -79,6 +81,7 @@ function wire() {
   $('flat-toggle').addEventListener('change', (e) => viewer.setFlatShading(e.target.checked));
   $('edges-toggle').addEventListener('change', (e) => toggleEdges(e.target.checked));
   $('snap-toggle').addEventListener('change', (e) => setSnapping(e.target.checked));
+  $('trace-toggle').addEventListener('change', (e) => setTraceMode(e.target.checked));
   $('reset-view').addEventListener('click', () => viewer.fitView());
   for (const name of ['front', 'top', 'side']) $(`view-${name}`).addEventListener('click', () => lookFrom(name));
   $('ortho-toggle').addEventListener('change', (e) => setOrthographic(e.target.checked));
@@ -129,7 +132,7 @@ window.featureline = {
     return state.mesh ? { ...state.mesh } : null;
   },
   get lines() {
-    return state.lines.map((l) => ({ id: l.id, name: l.name, keys: [...l.keys], closed: l.closed, result: l.result, error: l.error, stale: isStale(l) }));
+    return state.lines.map((l) => ({ id: l.id, name: l.name, keys: [...l.keys], closed: l.closed, trace: l.trace, result: l.result, error: l.error, stale: isStale(l) }));
   },
   get activeLineId() {
     return state.activeLineId;
@@ -184,6 +187,16 @@ window.featureline = {
   },
   get snapping() {
     return state.snapping;
+  },
+  get traceMode() {
+    return state.traceMode;
+  },
+  // Trace previews asked of the server so far (hovering), and whether one is drawn.
+  get previewRequests() {
+    return state.previewRequests ?? 0;
+  },
+  get previewLatencyMs() {
+    return state.previewLatencyMs ?? null;
   },
   get selectedKey() {
     return state.selectedKey;

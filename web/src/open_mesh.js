@@ -393,6 +393,7 @@ export function applySession(doc) {
       if (l.name) line.name = l.name;
       line.keys = [...l.keys];
       line.closed = !!l.closed;
+      line.trace = l.trace === true;
     }
     if (!state.lines.length) addLineUnrecorded();
     state.activeLineId = state.lines[0].id;

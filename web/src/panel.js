@@ -60,10 +60,12 @@ export function refresh() {
   renderHistoryButtons();
   renderSegmentStaleness();
   $('snap-toggle').checked = state.snapping;
+  $('trace-toggle').checked = state.traceMode;
 }
 
 export function lineStateText(line) {
   if (line.error && line.failedKey === requestKey(line)) return { text: 'error', error: true };
+  if (line.trace) return { text: isStale(line) || !line.result ? 'traced · updating…' : `traced · length ${num(line.result.refined.length, 3)}` };
   if (keysProblem(line)) return { text: `${line.keys.length} key${line.keys.length === 1 ? '' : 's'}` };
   if (isStale(line) || !line.result) return { text: `${line.keys.length} keys · updating…` };
   return { text: `${line.keys.length} keys · length ${num(line.result.refined.length, 3)}` };

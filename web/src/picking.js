@@ -5,6 +5,7 @@ import { $, history, num, showMessage, state, viewer } from './app.js';
 import { ringNeighbourhood, strongestFeatureVertex } from './geometry.js';
 import { activeLine, addKey, afterEdit, deleteKey, moveKeyUnrecorded, renderHistoryButtons, restore, snapshot } from './lines.js';
 import { refresh } from './panel.js';
+import { clearTracePreview, hoverTrace, traceClick } from './trace.js';
 
 // Snapping: a clicked key moves to the vertex of largest |curvature| within this many edges
 // of the clicked vertex and this many pixels of the click (so zooming in makes it finer).
@@ -112,14 +113,17 @@ export function hoverFeedback(x, y) {
     readout.textContent = `${line?.name ?? 'line'}, key ${key.keyIndex + 1} (vertex ${line?.keys[key.keyIndex]}): drag to move, right-click or Delete to remove`;
     readout.hidden = false;
     viewer.setSnapPreview(null);
+    clearTracePreview();
     return;
   }
   const target = keyVertexAt(x, y, lastKeyOfActiveLine());
   if (!target) {
     readout.hidden = true;
     viewer.setSnapPreview(null);
+    clearTracePreview();
     return;
   }
+  hoverTrace(pointer.down ? null : target.vertex); // not while orbiting
   const c = state.curvature ? ` · curvature ${num(state.curvature[target.hit.vertex], 3)}` : '';
   const snap = target.snapped ? ` · snaps to vertex ${target.vertex}${state.curvature ? ` (${num(state.curvature[target.vertex], 3)})` : ''}` : '';
   readout.textContent = `vertex ${target.hit.vertex}${c}${snap}`;
@@ -175,7 +179,13 @@ export function onPointerUp(e) {
   if (Math.hypot(e.clientX - down.x, e.clientY - down.y) > CLICK_SLOP_PIXELS) return;
   const target = keyVertexAt(e.clientX, e.clientY, lastKeyOfActiveLine());
   if (!target) {
-    showMessage('That click missed the mesh: click on the surface to place a key.');
+    showMessage(`That click missed the mesh: click on the surface to ${state.traceMode ? 'trace a feature' : 'place a key'}.`);
+    return;
+  }
+  // Trace mode: a click traces the feature under it; Shift+click adds a key as in key mode.
+  if (state.traceMode && !e.shiftKey) {
+    state.lastClickAdd = null;
+    traceClick(target.vertex);
     return;
   }
   const before = snapshot();

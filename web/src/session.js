@@ -13,7 +13,7 @@ export function sessionDocument({ mesh, lines, options, upAxis, view }) {
     mesh: mesh ? { name: mesh.name, id: mesh.id, vertices: mesh.vertexCount, faces: mesh.faceCount, format: mesh.description?.format ?? null } : null,
     up_axis: upAxis,
     options: structuredClone(options ?? {}),
-    lines: lines.map((l) => ({ name: l.name, keys: [...l.keys], closed: !!l.closed })),
+    lines: lines.map((l) => ({ name: l.name, keys: [...l.keys], closed: !!l.closed, ...(l.trace ? { trace: true } : {}) })),
   };
   if (view) doc.view = { position: [...view.position], target: [...view.target], orthographic: !!view.orthographic, zoom: view.zoom };
   return doc;
@@ -42,6 +42,7 @@ export function parseSession(text) {
   doc.lines.forEach((l, i) => {
     if (!Array.isArray(l.keys) || !l.keys.every((k) => Number.isInteger(k) && k >= 0 && k < doc.mesh.vertices))
       throw new Error(`line ${i + 1}: keys must be vertex ids from 0 to ${doc.mesh.vertices - 1}`);
+    if (l.trace != null && (l.trace !== true || l.keys.length !== 1)) throw new Error(`line ${i + 1}: "trace" is true on a line of one key, or absent`);
   });
   if (doc.options != null && typeof doc.options !== 'object') throw new Error('"options" must be an object');
   if (doc.view != null) checkView(doc.view);

@@ -20,6 +20,7 @@ export const COLORS = {
   hoverKey: 0xffffff,
   selectedKey: 0xff4df0,
   snapPreview: 0x5cff8a,
+  tracePreview: 0xfff3a0,
   edges: 0x1d2330,
 };
 const KEY_PIXELS = 7; // key marker radius on screen
@@ -156,7 +157,8 @@ export class Viewer {
     this.keyGroup = new THREE.Group();
     this.edgeGroup = new THREE.Group();
     this.hoverGroup = new THREE.Group();
-    this.scene.add(this.meshGroup, this.edgeGroup, this.segmentGroup, this.lineGroup, this.keyGroup, this.hoverGroup);
+    this.previewGroup = new THREE.Group(); // the line a click would trace
+    this.scene.add(this.meshGroup, this.edgeGroup, this.segmentGroup, this.lineGroup, this.previewGroup, this.keyGroup, this.hoverGroup);
     this.upAxis = 'y';
 
     this.raycaster = new THREE.Raycaster();
@@ -253,6 +255,7 @@ export class Viewer {
     this.clearGroup(this.keyGroup);
     this.clearGroup(this.edgeGroup);
     this.clearGroup(this.hoverGroup);
+    this.clearGroup(this.previewGroup);
     this.hoverKey = null;
     this.selectedKey = null;
     this.mesh = mesh;
@@ -646,6 +649,14 @@ export class Viewer {
     this.requestRender();
   }
 
+  // The line a click here would trace (trace mode), drawn faintly; null draws none.
+  setTracePreview(points, closed = false) {
+    this.clearGroup(this.previewGroup);
+    if (this.mesh && points?.length >= 2)
+      for (const o of this.makeLine(points, closed, COLORS.tracePreview, 2.5, { active: false, kind: 'preview' })) this.previewGroup.add(o);
+    this.requestRender();
+  }
+
   // ---- lines and keys -------------------------------------------------------------------
   clearGroup(group) {
     for (const child of [...group.children]) {
@@ -765,6 +776,7 @@ export class Viewer {
       cameraPosition: this.camera.position.toArray(),
       orbitCenter: this.controls.target.toArray(),
       snapPreview: this.hoverGroup.children[0]?.userData.vertex ?? null,
+      tracePreviewPoints: this.previewGroup.children.length ? this.previewGroup.children[1].geometry.attributes.instanceStart.count + 1 : 0,
     };
   }
 

@@ -1,0 +1,147 @@
+// One click, one line: in trace mode a click on a ridge, valley or crease asks the server for
+// the whole feature through it ({"keys": [v], "trace": true}), and hovering shows, faintly, the
+// line that click would give. Previews are the trace alone (no snake: a few milliseconds on
+// the server), debounced, the previous one cancelled as the pointer moves, and remembered per
+// vertex so moving back and forth asks the server once.
+import * as api from './api.js';
+import { showMessage, state, viewer } from './app.js';
+import { activeLine, addLineUnrecorded, edit, settleIdle } from './lines.js';
+
+// Pointer moves closer together than this (ms) ask for one preview, the last.
+const HOVER_DEBOUNCE_MS = 40;
+// Previews remembered (per vertex and options); the oldest is forgotten first.
+const PREVIEW_CACHE_SIZE = 256;
+const STOP_NAMES = {
+  closed: 'closed',
+  'feature-end': 'the feature fades',
+  boundary: 'the boundary',
+  junction: 'a junction of creases',
+  'line-met': 'the line itself',
+  'max-edges': 'the length limit',
+};
+
+const previews = new Map(); // cache key -> {result} or {error}
+const hover = { vertex: null, timer: 0, controller: null, since: 0 };
+
+// The request of a traced line from `vertex` with the page's options; a preview is the trace
+// alone (refine false).
+export function traceRequest(vertex, { preview = false } = {}) {
+  const options = structuredClone(state.options);
+  if (preview) options.refine = false;
+  const body = { keys: [vertex], trace: true };
+  if (Object.keys(options).length) body.options = options;
+  return body;
+}
+
+const previewKey = (vertex) => `${state.mesh?.id}:${JSON.stringify(traceRequest(vertex, { preview: true }))}`;
+
+function remember(key, answer) {
+  previews.delete(key);
+  previews.set(key, answer);
+  if (previews.size > PREVIEW_CACHE_SIZE) previews.delete(previews.keys().next().value);
+}
+
+// The preview of a trace from `vertex`: {result} or {error} (a 422 when there is nothing to
+// trace there, which is remembered like a line). Other failures are not remembered.
+export async function previewTrace(vertex, { signal } = {}) {
+  const key = previewKey(vertex);
+  if (previews.has(key)) return previews.get(key);
+  state.previewRequests = (state.previewRequests ?? 0) + 1;
+  try {
+    const result = await api.detectFeatureLines(state.mesh.id, traceRequest(vertex, { preview: true }), { signal });
+    remember(key, { result });
+    return { result };
+  } catch (e) {
+    if (e instanceof api.ApiError && e.status === 422) {
+      const answer = { error: e.message };
+      remember(key, answer);
+      return answer;
+    }
+    throw e;
+  }
+}
+
+export function setTraceMode(on) {
+  state.traceMode = on;
+  const toggle = document.getElementById('trace-toggle');
+  if (toggle) toggle.checked = on;
+  if (!on) clearTracePreview();
+  showMessage(
+    on
+      ? 'Trace mode: a click on a ridge, valley or crease gives the whole feature line (hover to see it first); Shift+click adds a key.'
+      : 'Key mode: a click adds a key to the active line.',
+  );
+}
+
+export function clearTracePreview() {
+  clearTimeout(hover.timer);
+  hover.controller?.abort();
+  hover.controller = null;
+  hover.vertex = null;
+  viewer.setTracePreview(null);
+}
+
+// The pointer is over `vertex` (null: off the mesh): after a short pause, the line a click
+// there would trace is drawn faintly.
+export function hoverTrace(vertex) {
+  if (!state.traceMode || !state.mesh || vertex == null) return clearTracePreview();
+  if (vertex === hover.vertex) return;
+  clearTimeout(hover.timer);
+  hover.controller?.abort();
+  hover.vertex = vertex;
+  hover.since = performance.now();
+  const cached = previews.get(previewKey(vertex));
+  if (cached) return drawPreview(cached);
+  viewer.setTracePreview(null);
+  hover.timer = setTimeout(async () => {
+    const controller = new AbortController();
+    hover.controller = controller;
+    try {
+      const answer = await previewTrace(vertex, { signal: controller.signal });
+      if (hover.vertex === vertex) drawPreview(answer);
+    } catch {
+      // cancelled by a newer move, or the server is busy: no preview is fine
+    }
+  }, HOVER_DEBOUNCE_MS);
+}
+
+function drawPreview(answer) {
+  const r = answer.result;
+  viewer.setTracePreview(r ? r.initial.points : null, r?.closed);
+  // From the pointer reaching the vertex to its preview drawn (the page's benchmark reads it).
+  if (r) state.previewLatencyMs = performance.now() - hover.since;
+}
+
+export function describeTrace(trace, closed) {
+  if (closed) return 'a closed loop';
+  const [a, b] = trace.ends.map((e) => STOP_NAMES[e.reason] ?? e.reason);
+  return a === b ? `both ends at ${a}` : `ends at ${a} and at ${b}`;
+}
+
+// A click in trace mode: the traced line becomes the active line when that one has no keys, a
+// new line otherwise. Nothing to trace there: a message, and no edit.
+export async function traceClick(vertex) {
+  state.pendingTraces = (state.pendingTraces ?? 0) + 1;
+  try {
+    let answer;
+    try {
+      answer = await api.withRetry(() => previewTrace(vertex));
+    } catch (e) {
+      return showMessage(`Tracing from vertex ${vertex} failed: ${e.message}`, { error: true });
+    }
+    if (!answer.result) return showMessage(`Nothing to trace at vertex ${vertex}: ${answer.error}`, { error: true });
+    const reuse = activeLine()?.keys.length === 0 ? activeLine() : null;
+    let line = reuse;
+    edit(`trace a line from vertex ${vertex}`, () => {
+      line = reuse ?? addLineUnrecorded();
+      line.keys = [vertex];
+      line.trace = true;
+      line.closed = false;
+    });
+    const r = answer.result;
+    showMessage(`${line.name}: the ${r.trace.sign} through vertex ${vertex}, ${r.initial.vertices.length - (r.closed ? 0 : 1)} edges, ${describeTrace(r.trace, r.closed)}. Drag its key to trace from elsewhere; Shift+click adds keys to edit it by hand.`);
+  } finally {
+    state.pendingTraces--;
+    settleIdle();
+  }
+}
