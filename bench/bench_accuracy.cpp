@@ -262,40 +262,6 @@ Case cad_case(const std::string& file) {
 // Measures
 // ---------------------------------------------------------------------------------
 
-struct Distance {
-  double mean = 0, max = 0;
-};
-
-// Arc-length mean (Simpson's rule per segment) and max of the distance along a polyline.
-Distance line_distance(const std::vector<Eigen::Vector3d>& points, bool closed,
-                       const std::function<double(const Eigen::Vector3d&)>& distance) {
-  Distance d;
-  if (points.empty()) return d;
-  std::vector<double> at(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    at[i] = distance(points[i]);
-    d.max = std::max(d.max, at[i]);
-  }
-  const std::size_t segments = points.size() < 2 ? 0 : (closed ? points.size() : points.size() - 1);
-  double length = 0, integral = 0;
-  for (std::size_t s = 0; s < segments; ++s) {
-    const std::size_t t = (s + 1) % points.size();
-    const double l = (points[t] - points[s]).norm();
-    if (l == 0) continue;
-    const double mid = distance(0.5 * (points[s] + points[t]));
-    d.max = std::max(d.max, mid);
-    integral += l * (at[s] + 4 * mid + at[t]) / 6;
-    length += l;
-  }
-  if (length > 0) {
-    d.mean = integral / length;
-  } else {
-    for (double x : at) d.mean += x;
-    d.mean /= double(at.size());
-  }
-  return d;
-}
-
 double closed_turning(std::vector<Eigen::Vector3d> points, bool closed) {
   if (closed && points.size() >= 3) {
     points.push_back(points[0]);
@@ -317,7 +283,7 @@ struct LineOutcome {
   std::vector<std::uint32_t> keys;
   bool failed = false;
   std::string error;
-  Distance initial, refined;
+  LineDistance initial, refined;
   double turning = 0, ms = 0;
   int iterations = 0;
   std::size_t fallbacks = 0;
@@ -391,8 +357,8 @@ using Clock = std::chrono::steady_clock;
 void trace_line(const std::string& name, double noise, int seed, double estimated_noise, const FeatureLineResult& r,
                 const std::vector<Eigen::Vector3d>& refined, const LineSpec& spec, double floor) {
   std::fprintf(stderr, "%s, noise %g%% (estimated %.3f), seed %d: initial %.3f, refined %.3f, floor %.3f\n", name.c_str(),
-               noise, estimated_noise, seed, line_distance(r.initial_points, r.closed, spec.distance).mean,
-               line_distance(refined, r.closed, spec.distance).mean, floor);
+               noise, estimated_noise, seed, arc_length_distance(r.initial_points, r.closed, spec.distance).mean,
+               arc_length_distance(refined, r.closed, spec.distance).mean, floor);
   for (const auto& w : r.warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
   for (const auto& p : r.piece_reports)
     std::fprintf(stderr, "  piece %u..%u (%zu edges): %s%s%s, %d iterations%s\n", p.from, p.to, p.edges, p.kept.c_str(),
@@ -506,8 +472,8 @@ LineOutcome run_line(const PreparedMesh& mesh, const LineSpec& spec, const Varia
   try {
     const auto r = detect_feature_line(mesh, request);
     const auto refined = refined_positions(r);
-    out.initial = line_distance(r.initial_points, r.closed, spec.distance);
-    out.refined = line_distance(refined, r.closed, spec.distance);
+    out.initial = arc_length_distance(r.initial_points, r.closed, spec.distance);
+    out.refined = arc_length_distance(refined, r.closed, spec.distance);
     out.turning = closed_turning(refined, r.closed);
     out.iterations = r.iterations;
     out.fallbacks = r.initial.fallbacks.size();

@@ -371,12 +371,4 @@ FeatureSeeds find_feature_seeds(const PreparedMesh& mesh, const FeatureSeedOptio
   return seeds;
 }
 
-std::optional<CrestFrame> crest_frame(const PreparedMesh& mesh, std::uint32_t v, FeatureSign sign) {
-  const std::optional<FieldFit> fit = fit_field(mesh, v, crease_sign_value(sign));
-  if (!fit || !(fit->across < fit->along)) return std::nullopt;
-  // The fitted parabola across the crest falls by -across * t^2 / 2 at t = 2 edge lengths.
-  const double value = fit->values[0];
-  return CrestFrame{fit->along_3d(), value > 0 ? -2 * fit->across / value : 0.0};
-}
-
 }  // namespace featureline

@@ -147,17 +147,4 @@ struct FeatureSeeds {
 FeatureSeeds find_feature_seeds(const PreparedMesh& mesh, const FeatureSeedOptions& options = {},
                                 const Cancellation* cancel = nullptr);
 
-/// The crest of the `sign` feature field through a vertex, from a quadratic fitted to the field
-/// over its two rings (vertices on creases left out), in its tangent plane.
-struct CrestFrame {
-  Eigen::Vector3d direction;  ///< unit; along which the fitted field bends least (sign arbitrary)
-  /// How far the fitted field falls across the crest within two local edge lengths of the
-  /// vertex, as a share of the vertex's own value (<= 0 where it does not fall: no crest).
-  double fall_across = 0;
-};
-
-/// The crest frame at v; std::nullopt where the fit is degenerate (fewer than 8 vertices,
-/// collinear ones) or the field bends equally every way.
-std::optional<CrestFrame> crest_frame(const PreparedMesh& mesh, std::uint32_t v, FeatureSign sign);
-
 }  // namespace featureline

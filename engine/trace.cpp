@@ -5,6 +5,8 @@
 #include <optional>
 #include <string>
 
+#include <Eigen/Dense>
+
 #include "engine/errors.h"
 #include "engine/initial_line.h"
 #include "engine/internal/geometry.h"
@@ -28,9 +30,8 @@ void check_trace_options(const TraceOptions& options) {
 
 namespace {
 
-// A seed must be on a crest: the field falls across it by at least this share of its value
-// within two edge lengths. A Gaussian ridge ten edges wide still falls by 11%; a sphere's or a
-// cylinder's field does not fall at all (nothing to follow there).
+// A seed must be on a crest: the field a few steps across it is at least this share lower than
+// along it. A sphere's or a cylinder's field does not fall at all (nothing to follow there).
 constexpr double kMinCrestFall = 0.05;
 // At a junction the branch followed must turn this much less than the next best (radians), or
 // the choice is the user's.
@@ -44,6 +45,20 @@ std::vector<std::uint32_t> crease_neighbors(const PreparedMesh& mesh, std::uint3
   for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k)
     if (mesh.curvature.crease[k] == sign) out.push_back(mesh.neighbors[k]);
   return out;
+}
+
+// A crease is followed when at least this many of its edges of one sign are joined: noise on a
+// smooth surface marks scattered single edges and short runs as creases (57 of them on a
+// 5,000-triangle ridge at 20% noise), which are no feature.
+constexpr std::size_t kMinCreaseRun = 3;
+
+// Whether v's crease edges of `sign` belong to a connected run of at least kMinCreaseRun edges.
+bool on_crease_run(const PreparedMesh& mesh, std::uint32_t v, double sign) {
+  std::vector<std::uint32_t> reached{v};
+  for (std::size_t i = 0; i < reached.size() && reached.size() <= kMinCreaseRun; ++i)
+    for (auto w : crease_neighbors(mesh, reached[i], sign))
+      if (std::find(reached.begin(), reached.end(), w) == reached.end()) reached.push_back(w);
+  return reached.size() > kMinCreaseRun;
 }
 
 // d in v's tangent plane, unit length (d itself, normalised, where v has no normal).
@@ -115,9 +130,9 @@ std::optional<Seed> nearest_crease_seed(const PreparedMesh& mesh, std::uint32_t 
   double best_distance = 0;
   for (const auto& [u, ring] : found) {
     if (best && ring > best_ring) break;
-    const auto ridges = crease_neighbors(mesh, u, 1).size(), valleys = crease_neighbors(mesh, u, -1).size();
-    const bool ridge = only > 0 || (only == 0 && ridges >= valleys);
-    if ((ridge ? ridges : valleys) == 0) continue;
+    const bool ridge_run = only >= 0 && on_crease_run(mesh, u, 1), valley_run = only <= 0 && on_crease_run(mesh, u, -1);
+    if (!ridge_run && !valley_run) continue;
+    const bool ridge = ridge_run && (!valley_run || crease_neighbors(mesh, u, 1).size() >= crease_neighbors(mesh, u, -1).size());
     const double distance = (mesh.positions[u] - mesh.positions[v]).norm();
     if (best && (distance > best_distance || (distance == best_distance && u > best->vertex))) continue;
     best = Seed{u, ridge ? FeatureSign::ridge : FeatureSign::valley, true};
@@ -245,7 +260,8 @@ class Tracer {
     walk.first_step = kNoIndex;
     const double max_turn = options_.max_turn * kPi / 180;
     if (!walk.on_crease)
-      ahead.erase(std::remove_if(ahead.begin(), ahead.end(), [&](std::uint32_t w) { return turn(walk, c, w) > max_turn; }),
+      ahead.erase(std::remove_if(ahead.begin(), ahead.end(),
+                                 [&](std::uint32_t w) { return turn(walk, c, w) > max_turn || !on_crease_run(mesh_, w, sign_); }),
                   ahead.end());
     if (ahead.empty()) {
       if (!walk.on_crease) return {};
@@ -304,8 +320,8 @@ class Tracer {
 
   // A step of options.step local edge lengths on a smooth feature: among the vertices about
   // that far ahead (within max_turn of the line's direction), the strongest; joined by the
-  // feature-weighted path. Where the mesh ends before that, a step to its boundary. Ends the
-  // walk where the feature fades.
+  // feature-weighted path. Where the mesh ends within that, a step straight on to its boundary.
+  // Ends the walk where the feature fades.
   Step smooth_step(const Walk& walk, const Walk& other) const {
     const std::uint32_t c = walk.path.back();
     const double h = local_edge_length(mesh_, c), reach = options_.step * h;
@@ -319,33 +335,86 @@ class Tracer {
     }
     const auto found = rings_around(mesh_, c, int(std::ceil(options_.step)) + 3,
                                     [&](std::uint32_t v) { return !is_blocked(v) && (P[v] - P[c]).norm() <= reach + 2 * h; });
-    const Step step = weighted_step(c, strongest_ahead(found, c, d, reach - 0.75 * h, reach + 0.75 * h, false));
-    if (!step.path.empty()) return step;
-    const Step to_boundary = weighted_step(c, strongest_ahead(found, c, d, 0.5 * h, reach + 0.75 * h, true));
-    return to_boundary.path.empty() ? step : to_boundary;
+    // Within a step of the boundary the line goes straight on to it: there the field's fit sees
+    // one side only and drifts, while the line's direction comes from the steps before.
+    const Step to_boundary = weighted_step(c, boundary_ahead(found, c, d, reach));
+    if (!to_boundary.path.empty()) return to_boundary;
+    return weighted_step(c, crest_ahead(found, c, d, reach - 0.75 * h, reach + 0.75 * h));
   }
 
-  // The strongest vertex of `found` whose distance ahead of c along d is in [near, far] and
-  // which lies within max_turn of d (boundary vertices only when `boundary`); ties: the one
-  // nearer the straight line ahead. kNoIndex when none.
-  std::uint32_t strongest_ahead(const std::vector<std::pair<std::uint32_t, int>>& found, std::uint32_t c,
-                                const Eigen::Vector3d& d, double near, double far, bool boundary) const {
+  // Where the mesh ends within a step: the boundary vertex of `found` nearest the line's
+  // straight continuation (within max_turn of d, at most `far` ahead); kNoIndex when none.
+  std::uint32_t boundary_ahead(const std::vector<std::pair<std::uint32_t, int>>& found, std::uint32_t c,
+                               const Eigen::Vector3d& d, double far) const {
     const auto& P = mesh_.positions;
-    const Eigen::Vector3d& n = mesh_.vertex_normals[c];
+    const Eigen::Vector3d side = mesh_.vertex_normals[c].cross(d);
     const double slope = std::tan(options_.max_turn * kPi / 180);
     std::uint32_t best = kNoIndex;
-    double best_value = -1, best_lateral = 0;
+    double best_lateral = HUGE_VAL;
     for (const auto& [x, ring] : found) {
-      if (boundary && !mesh_.boundary_vertex[x]) continue;
+      if (!mesh_.boundary_vertex[x]) continue;
+      const Eigen::Vector3d r = P[x] - P[c];
+      const double along = r.dot(d), lateral = std::abs(r.dot(side));
+      if (along <= 0 || along > far || lateral > slope * along) continue;
+      if (lateral < best_lateral) best = x, best_lateral = lateral;
+    }
+    return best;
+  }
+
+  // The crest point among the vertices of `found` whose distance ahead of c along d is in
+  // [near, far] and which lie within max_turn of d:
+  // the vertex nearest the peak of a parabola fitted to the field across the line (its noise
+  // averages out over the section), or the strongest vertex where the section has no peak.
+  // kNoIndex when there is none.
+  std::uint32_t crest_ahead(const std::vector<std::pair<std::uint32_t, int>>& found, std::uint32_t c,
+                            const Eigen::Vector3d& d, double near, double far) const {
+    const auto& P = mesh_.positions;
+    const Eigen::Vector3d& n = mesh_.vertex_normals[c];
+    const Eigen::Vector3d side = n.cross(d);
+    const double slope = std::tan(options_.max_turn * kPi / 180);
+    struct Candidate {
+      std::uint32_t vertex;
+      double lateral, value;
+    };
+    std::vector<Candidate> section;
+    for (const auto& [x, ring] : found) {
       const Eigen::Vector3d r = P[x] - P[c];
       const double along = r.dot(d);
       if (along < near || along > far) continue;
-      const double lateral = (r - along * d - r.dot(n) * n).norm();
-      if (lateral > slope * along) continue;
-      const double value = feature_value(mesh_.curvature, x, sign_);
-      if (value > best_value || (value == best_value && lateral < best_lateral)) best = x, best_value = value, best_lateral = lateral;
+      const double lateral = r.dot(side);
+      if (std::abs(lateral) > slope * along) continue;
+      section.push_back({x, lateral, feature_value(mesh_.curvature, x, sign_)});
     }
-    return best;
+    if (section.empty()) return kNoIndex;
+    const auto strongest = std::max_element(section.begin(), section.end(), [](const Candidate& a, const Candidate& b) {
+      return a.value != b.value ? a.value < b.value : std::abs(a.lateral) > std::abs(b.lateral);
+    });
+    const std::optional<double> peak = section.size() >= 4 ? parabola_peak(section) : std::nullopt;
+    if (!peak) return strongest->vertex;
+    return std::min_element(section.begin(), section.end(), [&](const Candidate& a, const Candidate& b) {
+             return std::abs(a.lateral - *peak) < std::abs(b.lateral - *peak);
+           })->vertex;
+  }
+
+  // The lateral offset of the peak of f(t) = a + b t + c t^2 fitted (least squares) to the
+  // section's values; std::nullopt when the fit has no maximum inside the section.
+  template <class Section>
+  static std::optional<double> parabola_peak(const Section& section) {
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    double lo = HUGE_VAL, hi = -HUGE_VAL;
+    for (const auto& s : section) {
+      const Eigen::Vector3d row(1, s.lateral, s.lateral * s.lateral);
+      normal += row * row.transpose();
+      rhs += row * s.value;
+      lo = std::min(lo, s.lateral);
+      hi = std::max(hi, s.lateral);
+    }
+    const Eigen::Vector3d k = normal.ldlt().solve(rhs);
+    if (!k.allFinite() || !(k[2] < 0)) return std::nullopt;
+    const double t = -k[1] / (2 * k[2]);
+    if (!(t >= lo && t <= hi)) return std::nullopt;
+    return t;
   }
 
   // The feature-weighted path from c to `target`; a stop where the feature along it (the mean
@@ -402,19 +471,61 @@ void start_on_crease(const PreparedMesh& mesh, const Seed& seed, Walk& forward, 
   }
 }
 
+// The crest's axis through a smooth seed, at the first of three scales (1, 2 and 4 steps) where
+// the feature field falls across it: the mean field over ring sectors of the seed (16 sectors
+// of 22.5 degrees, opposite sectors together) is largest along the crest and smallest across.
+// A two-ring fit sees too little of a wide or noisy crest; a ring a few steps out sees its
+// shape. std::nullopt where the field falls by less than kMinCrestFall every way (a sphere, a
+// cylinder: nothing to follow).
+std::optional<Eigen::Vector3d> crest_axis(const PreparedMesh& mesh, std::uint32_t seed, double sign, double step) {
+  const auto& P = mesh.positions;
+  const Eigen::Vector3d& n = mesh.vertex_normals[seed];
+  const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
+  const double h = local_edge_length(mesh, seed);
+  constexpr int kSectors = 16;
+  for (double scale : {1.0, 2.0, 4.0}) {
+    const double radius = step * scale * h;
+    const auto found = rings_around(mesh, seed, int(std::ceil(1.5 * radius / h)) + 2,
+                                    [&](std::uint32_t v) { return (P[v] - P[seed]).norm() <= radius + h; });
+    std::array<double, kSectors / 2> sum{}, count{};
+    for (const auto& [v, ring] : found) {
+      const Eigen::Vector3d r = P[v] - P[seed];
+      const double distance = r.norm();
+      if (distance < radius - h) continue;
+      const double angle = std::atan2(r.dot(w), r.dot(u));  // (-pi, pi]
+      const int sector = int(std::floor((angle + kPi) / (2 * kPi) * kSectors)) % kSectors;
+      sum[sector % (kSectors / 2)] += feature_value(mesh.curvature, v, sign);
+      count[sector % (kSectors / 2)] += 1;
+    }
+    int along = -1;
+    std::array<double, kSectors / 2> mean{};
+    for (int k = 0; k < kSectors / 2; ++k) {
+      mean[k] = count[k] > 0 ? sum[k] / count[k] : -1;
+      if (count[k] > 0 && (along < 0 || mean[k] > mean[along])) along = k;
+    }
+    const int across = (along + kSectors / 4) % (kSectors / 2);
+    if (along < 0 || count[across] == 0 || !(mean[along] > 0)) continue;
+    if (1 - mean[across] / mean[along] < kMinCrestFall) continue;
+    const double angle = (along + 0.5) * 2 * kPi / kSectors - kPi;
+    return Eigen::Vector3d(std::cos(angle) * u + std::sin(angle) * w);
+  }
+  return std::nullopt;
+}
+
 // A smooth seed's two walks go both ways along its crest; a seed without a crest (the field
 // below the noise floor, or not falling across) has no feature to follow.
-void start_on_crest(const PreparedMesh& mesh, const Seed& seed, const Tracer& tracer, Walk& forward, Walk& backward) {
+void start_on_crest(const PreparedMesh& mesh, const Seed& seed, const Tracer& tracer, const TraceOptions& options,
+                    Walk& forward, Walk& backward) {
   const auto at = "vertex " + std::to_string(seed.vertex);
   const double strength = tracer.seed_value() / mesh.curvature_scale;
   if (!(tracer.seed_value() > 0) || tracer.seed_value() < tracer.floor_at(seed.vertex))
     throw GeometryError("no ridge, valley or crease to trace at " + at + ": its feature strength " + format_number(strength) +
                         " is within the noise");
-  const std::optional<CrestFrame> crest = crest_frame(mesh, seed.vertex, seed.sign);
-  if (!crest || crest->fall_across < kMinCrestFall)
+  const std::optional<Eigen::Vector3d> axis = crest_axis(mesh, seed.vertex, sign_value(seed.sign), options.step);
+  if (!axis)
     throw GeometryError("no ridge, valley or crease to trace at " + at +
                         ": the feature field does not fall across any direction there (no crest)");
-  forward.direction = tangent_at(mesh, seed.vertex, crest->direction);
+  forward.direction = tangent_at(mesh, seed.vertex, *axis);
   backward.direction = -forward.direction;
 }
 
@@ -448,7 +559,7 @@ TraceResult trace_feature(const PreparedMesh& mesh, std::uint32_t vertex, const 
   if (seed.on_crease)
     start_on_crease(mesh, seed, forward, backward, tracer.junctions(), options);
   else
-    start_on_crest(mesh, seed, tracer, forward, backward);
+    start_on_crest(mesh, seed, tracer, options, forward, backward);
   // Alternating, so a length limit shares the edges between both ways.
   while (!forward.done || !backward.done) {
     if (!forward.done) tracer.advance(forward, backward);

@@ -28,6 +28,35 @@ CrestDistance crest_distance(const HeightField& field, const std::vector<Eigen::
   return d;
 }
 
+LineDistance arc_length_distance(const std::vector<Eigen::Vector3d>& points, bool closed,
+                                 const std::function<double(const Eigen::Vector3d&)>& distance) {
+  LineDistance d;
+  if (points.empty()) return d;
+  std::vector<double> at(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    at[i] = distance(points[i]);
+    d.max = std::max(d.max, at[i]);
+  }
+  const std::size_t segments = points.size() < 2 ? 0 : (closed ? points.size() : points.size() - 1);
+  double length = 0, integral = 0;
+  for (std::size_t s = 0; s < segments; ++s) {
+    const std::size_t t = (s + 1) % points.size();
+    const double l = (points[t] - points[s]).norm();
+    if (l == 0) continue;
+    const double mid = distance(0.5 * (points[s] + points[t]));
+    d.max = std::max(d.max, mid);
+    integral += l * (at[s] + 4 * mid + at[t]) / 6;
+    length += l;
+  }
+  if (length > 0) {
+    d.mean = integral / length;
+  } else {
+    for (double x : at) d.mean += x;
+    d.mean /= double(at.size());
+  }
+  return d;
+}
+
 std::vector<Eigen::Vector3d> refined_positions(const FeatureLineResult& result) {
   std::vector<Eigen::Vector3d> out;
   for (const auto& p : result.refined) out.push_back(p.position);

@@ -2,6 +2,7 @@
 // total turning angle, adjacency of vertex paths.
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -19,6 +20,15 @@ struct CrestDistance {
   double mean = 0, max = 0;
 };
 CrestDistance crest_distance(const HeightField& field, const std::vector<Eigen::Vector3d>& points);
+
+/// The arc-length mean (Simpson's rule per segment) and the maximum (at points and segment
+/// midpoints) of `distance` along a polyline (closing segment included when `closed`); a
+/// polyline without length averages its points.
+struct LineDistance {
+  double mean = 0, max = 0;
+};
+LineDistance arc_length_distance(const std::vector<Eigen::Vector3d>& points, bool closed,
+                                 const std::function<double(const Eigen::Vector3d&)>& distance);
 
 /// Positions of a result's refined points.
 std::vector<Eigen::Vector3d> refined_positions(const FeatureLineResult& result);
