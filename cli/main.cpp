@@ -42,6 +42,7 @@ struct Inputs {
   std::string format;               // of standard input (else from the extension or content)
   featureline::ReadMeshOptions limits;
   json curvature = json::object();  // curvature table flags
+  bool keep_orientation = false;
 };
 
 struct LineFlags {
@@ -130,6 +131,9 @@ void add_inputs(CLI::App& command, Inputs& in, bool many) {
       ->capture_default_str()
       ->group("Reading limits");
   add_table_flags(command, featureline::curvature_option_table(), in.curvature, "Curvature (how the mesh is prepared)");
+  command.add_flag("--keep-orientation", in.keep_orientation,
+                   "Keep the faces of closed parts that point inward as they are (by default they are turned outward, so convex edges read as ridges)")
+      ->group("Curvature (how the mesh is prepared)");
 }
 
 void add_line_flags(CLI::App& command, LineFlags& f) {
@@ -187,6 +191,7 @@ featureline::MeshFile read_input_mesh(const std::string& path, const Inputs& in)
 std::shared_ptr<const featureline::PreparedMesh> prepare(const std::string& path, const Inputs& in, double& load_ms) {
   featureline::PrepareOptions options;
   featureline::apply_options(featureline::curvature_option_table(), in.curvature, "", options.curvature);
+  options.orient_outward = !in.keep_orientation;
   const auto start = std::chrono::steady_clock::now();
   const featureline::MeshFile file = read_input_mesh(path, in);
   featureline::RawMesh raw = featureline::read_mesh(file.bytes, file.format, in.limits);

@@ -260,6 +260,45 @@ void measure_boundary_and_box(PreparedMesh& pm) {
   stats.bbox_max = {hi.x(), hi.y(), hi.z()};
 }
 
+// Closed components (every edge of their faces has a face across) are counted, and those whose
+// signed volume is negative have faces that point inward: the curvature's signs come out
+// reversed there (convex edges read as valleys). With `outward` their faces are turned (corners
+// 1 and 2 swapped; edge k = (t[k], t[k+1]) then runs over the old edge 2 - k, so the faces across
+// swap to match); either way a warning says so.
+void orient_closed_components(PreparedMesh& pm, bool outward) {
+  MeshStatistics& stats = pm.statistics;
+  std::vector<char> open(stats.components, 0);
+  std::vector<double> volume(stats.components, 0);
+  const Eigen::Vector3d centre = 0.5 * (Eigen::Vector3d(stats.bbox_min.data()) + Eigen::Vector3d(stats.bbox_max.data()));
+  for (std::uint32_t f = 0; f < pm.triangles.size(); ++f) {
+    const auto& t = pm.triangles[f];
+    const auto c = std::size_t(pm.component[t[0]]);
+    for (int k = 0; k < 3; ++k) open[c] |= pm.face_neighbors[f][k] == kNoIndex;
+    const Eigen::Vector3d a = pm.positions[t[0]] - centre, b = pm.positions[t[1]] - centre, d = pm.positions[t[2]] - centre;
+    volume[c] += a.dot(b.cross(d)) / 6;
+  }
+  std::vector<char> inward(stats.components, 0);
+  for (std::size_t c = 0; c < stats.components; ++c) {
+    stats.closed_components += !open[c];
+    inward[c] = !open[c] && volume[c] < 0;
+    stats.inward_components += inward[c];
+  }
+  if (stats.inward_components == 0) return;
+  if (outward)
+    for (std::uint32_t f = 0; f < pm.triangles.size(); ++f) {
+      if (!inward[std::size_t(pm.component[pm.triangles[f][0]])]) continue;
+      std::swap(pm.triangles[f][1], pm.triangles[f][2]);
+      std::swap(pm.face_neighbors[f][0], pm.face_neighbors[f][2]);
+      ++stats.flipped_faces;
+    }
+  std::ostringstream msg;
+  msg << "the faces of " << stats.inward_components << " of " << stats.closed_components
+      << " closed part(s) pointed inward (negative volume), "
+      << (outward ? "and were turned outward so that convex edges read as ridges (" + std::to_string(stats.flipped_faces) + " faces)"
+                  : "so convex edges read as valleys");
+  pm.warnings.push_back(msg.str());
+}
+
 // The face tables every request reads (built once here).
 void build_face_tables(PreparedMesh& pm) {
   const std::size_t n = pm.positions.size();
@@ -400,6 +439,7 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   measure_boundary_and_box(pm);
   pm.timings.adjacency_ms = lap_ms(clock);
   face_tables.get();
+  orient_closed_components(pm, options.orient_outward);
   // Beside the normals and the curvature field (whose creases and mean curvature are serial):
   // the k-d tree, which reads only the positions and components.
   auto index = std::async(std::launch::async, [&pm] {

@@ -25,6 +25,10 @@ struct PrepareOptions {
   /// (prepared_bytes_lower_bound of the vertices and kept triangles, checked before anything is
   /// built and again as vertex copies for non-manifold faces are made); 0: no bound.
   std::size_t max_memory_bytes = 0;
+  /// A closed component whose faces point inward (negative signed volume: an exporter's
+  /// reversed winding) reads convex edges as valleys; true turns its faces outward (their
+  /// second and third corners swapped), false keeps them and warns.
+  bool orient_outward = true;
 };
 
 /// Counts and measures of a prepared mesh, as `featureline info` and the server report them.
@@ -42,6 +46,9 @@ struct MeshStatistics {
   std::size_t dropped_faces = 0;          ///< degenerate triangles (a repeated vertex index) not added
   std::size_t duplicated_vertices = 0;    ///< vertex copies added so non-manifold triangles fit
   std::size_t repeated_faces = 0;         ///< triangles over the same three vertices as an earlier one, not added
+  std::size_t closed_components = 0;      ///< components in which every edge has two faces
+  std::size_t inward_components = 0;      ///< closed components whose faces pointed inward (negative volume)
+  std::size_t flipped_faces = 0;          ///< faces of those turned outward (PrepareOptions::orient_outward)
   double mean_edge_length = 0;
   std::array<double, 3> bbox_min{0, 0, 0};
   std::array<double, 3> bbox_max{0, 0, 0};
@@ -90,8 +97,9 @@ struct PreparedMesh {
   TriMesh mesh;  ///< vertex i is input vertex i; duplicates made for non-manifold faces follow
   /// Input triangle index of each mesh face (faces keep input order; only dropped ones are missing).
   std::vector<std::uint32_t> source_triangle;
-  /// Corner vertex ids of each face in the input's corner order (barycentric coordinates in
-  /// results refer to this order).
+  /// Corner vertex ids of each face in the input's corner order, or with its second and third
+  /// corners swapped where its closed component was turned outward (statistics.flipped_faces);
+  /// barycentric coordinates in results refer to this order.
   std::vector<std::array<std::uint32_t, 3>> triangles;
   std::vector<Eigen::Vector3d> positions;       ///< copy of the points for cache-friendly access
   std::vector<Eigen::Vector3d> vertex_normals;  ///< angle-weighted, unit length (zero when isolated)

@@ -80,7 +80,7 @@ struct TraceOptions {
   /// field for at most this many edges, before the trace starts.
   int snap_rings = 2;
 
-  static constexpr ValidRange max_edges_range = closed_range(2, 100000);
+  static constexpr ValidRange max_edges_range = finite_from(2);
   static constexpr ValidRange stop_strength_range = closed_range(0, 0.99);
   static constexpr ValidRange min_signal_to_noise_range = closed_range(0, 100);
   static constexpr ValidRange step_range = closed_range(1, 10);

@@ -100,9 +100,13 @@ check "--trace: a traced line along creases at least as long as the chain" \
   [ "$(jq --argjson c "$chain_length" '.initial.method == "trace" and .trace.on_crease and .initial.length >= $c - 1e-9' "$tmp/traced.json")" = true ]
 "$FEATURELINE" detect "$mesh" --keys "$middle" --trace --closed >"$tmp/out" 2>"$tmp/err"; rc=$?
 check "--trace with --closed is a usage error (exit 2)" [ $rc = 2 ]
-"$FEATURELINE" detect "$mesh" --keys "$middle" --trace --trace-sign valley >"$tmp/out" 2>"$tmp/err"; rc=$?
-check "--trace-sign valley beside a convex crease follows the valley nearby" \
-  [ "$rc $(jq -r .trace.sign "$tmp/out")" = "0 valley" ]
+valley=$(jq -r '[.crease_chains[] | select(.sign == "valley")][0].vertices as $v | $v[($v|length)/2|floor]' "$tmp/features.json")
+"$FEATURELINE" detect "$mesh" --keys "$valley" --trace >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "--trace from the first valley chain's middle follows a concave crease" \
+  [ "$rc $(jq -c '[.trace.sign, .trace.on_crease]' "$tmp/out")" = '0 ["valley",true]' ]
+"$FEATURELINE" detect "$mesh" --keys "$valley" --trace --trace-sign ridge >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "--trace-sign ridge from there: no ridge nearby, refused (exit 1) saying so" \
+  [ "$rc $(grep -c 'no ridge, valley or crease to trace' "$tmp/err")" = "1 1" ]
 "$FEATURELINE" features "$mesh" --max-chains 5 --max-seeds 0 >"$tmp/f5.json"; rc=$?
 check "--max-chains 5 gives 5 chains" [ "$(jq '.crease_chains|length' "$tmp/f5.json")" = 5 ]
 "$FEATURELINE" features "$mesh" --corner-angle 200 >"$tmp/out" 2>"$tmp/err"; rc=$?

@@ -131,5 +131,68 @@ TEST(PreparedMesh, StageTimingsAreConsecutivePartsOfTheWhole) {
   EXPECT_GT(c.jet_ms, 0);  // the default field is the jet: its fits ran
 }
 
+// The cube with every face's winding reversed: a closed part whose faces point inward.
+RawMesh inside_out(RawMesh mesh) {
+  for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+  return mesh;
+}
+
+// The crease sign of every edge along the cube's edge y = z = 0 (+1 convex).
+std::vector<int> crease_signs_along_x_edge(const PreparedMesh& mesh) {
+  std::vector<int> signs;
+  for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v)
+    for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) {
+      const auto w = mesh.neighbors[k];
+      const auto &p = mesh.positions[v], &q = mesh.positions[w];
+      if (v < w && p.y() == 0 && p.z() == 0 && q.y() == 0 && q.z() == 0) signs.push_back(mesh.curvature.crease[k]);
+    }
+  return signs;
+}
+
+TEST(PreparedMesh, InwardClosedPartsAreTurnedOutwardAndReported) {
+  const int n = 4;
+  const auto outward = prepare_mesh(make_subdivided_cube(n));
+  EXPECT_EQ(outward->statistics.closed_components, 1u);
+  EXPECT_EQ(outward->statistics.inward_components, 0u);
+  EXPECT_EQ(outward->statistics.flipped_faces, 0u);
+  EXPECT_EQ(crease_signs_along_x_edge(*outward), std::vector<int>(n, 1));
+
+  const auto turned = prepare_mesh(inside_out(make_subdivided_cube(n)));
+  EXPECT_EQ(turned->statistics.inward_components, 1u);
+  EXPECT_EQ(turned->statistics.flipped_faces, std::size_t(12 * n * n));
+  EXPECT_EQ(crease_signs_along_x_edge(*turned), std::vector<int>(n, 1)) << "convex edges read as ridges again";
+  EXPECT_EQ(turned->triangles, outward->triangles) << "the turned faces are the outward cube's, corner for corner";
+  EXPECT_EQ(turned->face_neighbors, outward->face_neighbors);
+  ASSERT_EQ(turned->warnings.size(), 1u);
+  EXPECT_NE(turned->warnings[0].find("pointed inward"), std::string::npos);
+
+  PrepareOptions keep;
+  keep.orient_outward = false;
+  const auto kept = prepare_mesh(inside_out(make_subdivided_cube(n)), keep);
+  EXPECT_EQ(kept->statistics.inward_components, 1u);
+  EXPECT_EQ(kept->statistics.flipped_faces, 0u);
+  EXPECT_EQ(crease_signs_along_x_edge(*kept), std::vector<int>(n, -1)) << "kept inward: convex edges read as valleys";
+  ASSERT_EQ(kept->warnings.size(), 1u);
+  EXPECT_NE(kept->warnings[0].find("convex edges read as valleys"), std::string::npos);
+}
+
+TEST(PreparedMesh, OnlyTheInwardPartOfTwoIsTurnedAndOpenPartsAreNotClosed) {
+  RawMesh two = make_subdivided_cube(2);
+  const RawMesh second = translated(inside_out(make_subdivided_cube(2)), 3, 0, 0);
+  const auto offset = std::uint32_t(two.positions.size());
+  two.positions.insert(two.positions.end(), second.positions.begin(), second.positions.end());
+  for (auto t : second.triangles) two.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  two.source_faces = two.triangles.size();
+  const auto mesh = prepare_mesh(two);
+  EXPECT_EQ(mesh->statistics.closed_components, 2u);
+  EXPECT_EQ(mesh->statistics.inward_components, 1u);
+  EXPECT_EQ(mesh->statistics.flipped_faces, 48u);
+  for (std::uint32_t f = 0; f < 48; ++f) EXPECT_EQ(mesh->triangles[f], two.triangles[f]) << "the outward cube keeps its faces";
+
+  const auto open = prepare_mesh(make_plane_grid(5, 0, 1));
+  EXPECT_EQ(open->statistics.closed_components, 0u);
+  EXPECT_EQ(open->statistics.inward_components, 0u);
+}
+
 }  // namespace
 }  // namespace featureline

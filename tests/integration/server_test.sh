@@ -209,7 +209,7 @@ check "... saying a trace starts from one key" grep -q 'exactly one key' "$T/lt2
 echo '{"keys": [2000], "trace": "yes"}' >"$T/t3.json"
 lines "$T/lt3.json" "$T/t3.json"
 expect "trace not a boolean" 400 invalid_request POST "$FL" "$T/lt3.json"
-echo '{"keys": [100], "trace": true}' >"$T/t4.json"
+echo '{"keys": [2500], "trace": true}' >"$T/t4.json"
 lines "$T/lt4.json" "$T/t4.json"
 expect "trace on a flat face" 422 unprocessable_geometry POST "$FL" "$T/lt4.json"
 check "... saying there is nothing to trace" grep -q 'no ridge, valley or crease to trace at vertex' "$T/lt4.json"

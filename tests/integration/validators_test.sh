@@ -148,6 +148,10 @@ mutate "$FIX/line_request.json" "$WORK/r0.json" 'const l = JSON.parse(JSON.strin
 expect 0 "batch request is valid" -- node "$VR" --request POST "$FL" "$WORK/r0.json"
 mutate "$FIX/line_request.json" "$WORK/r1.json" 'd.keys = [701];'
 expect 1 "one key fails" --grep '/keys' -- node "$VR" --request POST "$FL" "$WORK/r1.json"
+mutate "$FIX/line_request.json" "$WORK/r1t.json" 'd.keys = [701]; delete d.closed; d.trace = true;'
+expect 0 "one key with trace is valid" -- node "$VR" --request POST "$FL" "$WORK/r1t.json"
+mutate "$FIX/line_request.json" "$WORK/r2t.json" 'd.keys = [701, 963]; delete d.closed; d.trace = true;'
+expect 1 "two keys with trace fail" --grep '/keys' -- node "$VR" --request POST "$FL" "$WORK/r2t.json"
 mutate "$FIX/line_request.json" "$WORK/r2.json" 'd.options.snake.iterationz = 5;'
 expect 1 "unknown snake option fails" --grep 'unexpected property "iterationz"' -- node "$VR" --request POST "$FL" "$WORK/r2.json"
 mutate "$FIX/line_request.json" "$WORK/r3.json" 'd.options.rings = 9;'
