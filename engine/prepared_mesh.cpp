@@ -265,22 +265,27 @@ void measure_boundary_and_box(PreparedMesh& pm) {
 // reversed there (convex edges read as valleys). With `outward` their faces are turned (corners
 // 1 and 2 swapped; edge k = (t[k], t[k+1]) then runs over the old edge 2 - k, so the faces across
 // swap to match); either way a warning says so.
+constexpr double kFlatShell = 1e-3;
+
 void orient_closed_components(PreparedMesh& pm, bool outward) {
   MeshStatistics& stats = pm.statistics;
   std::vector<char> open(stats.components, 0);
-  std::vector<double> volume(stats.components, 0);
+  std::vector<double> volume(stats.components, 0), magnitude(stats.components, 0);
   const Eigen::Vector3d centre = 0.5 * (Eigen::Vector3d(stats.bbox_min.data()) + Eigen::Vector3d(stats.bbox_max.data()));
   for (std::uint32_t f = 0; f < pm.triangles.size(); ++f) {
     const auto& t = pm.triangles[f];
     const auto c = std::size_t(pm.component[t[0]]);
     for (int k = 0; k < 3; ++k) open[c] |= pm.face_neighbors[f][k] == kNoIndex;
     const Eigen::Vector3d a = pm.positions[t[0]] - centre, b = pm.positions[t[1]] - centre, d = pm.positions[t[2]] - centre;
-    volume[c] += a.dot(b.cross(d)) / 6;
+    const double v = a.dot(b.cross(d)) / 6;
+    volume[c] += v;
+    magnitude[c] += std::abs(v);
   }
   std::vector<char> inward(stats.components, 0);
   for (std::size_t c = 0; c < stats.components; ++c) {
     stats.closed_components += !open[c];
-    inward[c] = !open[c] && volume[c] < 0;
+    // A closed shell with next to no volume (both sides of a sheet) has no inside to point at.
+    inward[c] = !open[c] && volume[c] < -kFlatShell * magnitude[c];
     stats.inward_components += inward[c];
   }
   if (stats.inward_components == 0) return;
