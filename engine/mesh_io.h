@@ -100,6 +100,14 @@ struct RawMesh {
 /// \throw UnsupportedFormatError, MeshFormatError, LimitExceededError
 RawMesh read_mesh(std::string_view bytes, MeshFormat format, const ReadMeshOptions& options = {});
 
+/// A glTF document and the files its buffers are in (file name, bytes: a .gltf with its .bin,
+/// uploaded together), packed into one self-contained GLB: the files' buffers laid end to end
+/// in its binary chunk, the bufferViews moved to match; buffers given as data: URIs stay. Files
+/// the document does not name are ignored; image files are not needed (images are not read).
+/// Returns the document itself when no buffer names a file.
+/// \throw MeshFormatError when the document is not JSON or names a buffer file not given
+std::string pack_gltf_files(std::string_view gltf, const std::vector<std::pair<std::string, std::string>>& files);
+
 /// A mesh file's bytes and format, not parsed yet.
 struct MeshFile {
   std::string bytes;

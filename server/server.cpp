@@ -51,6 +51,8 @@ using nlohmann::json;
 constexpr std::size_t kMaxJsonBytes = RequestLimits::max_json_bytes;
 // Upload buffers start at this and double as bytes arrive (held against the upload budget).
 constexpr std::size_t kUploadChunkBytes = std::size_t(1) << 20;
+// A .gltf and its .bin files rarely number more than a few; every part costs a string.
+constexpr std::size_t kMaxUploadFiles = 64;
 
 // The time routing started on this worker thread (set in the pre-routing handler), for the
 // access log and the latency metrics.
@@ -555,6 +557,7 @@ struct FeaturelineServer::Impl {
   struct UploadHead {
     std::size_t length = 0;
     std::optional<MeshFormat> format;  ///< from ?format= or Content-Type; else sniffed from the body
+    bool files = false;                ///< multipart/form-data: a .gltf and the files it names
   };
 
   // Refuses an upload from its head alone (throws HttpError). Transfer-Encoding, Content-Encoding,
@@ -590,6 +593,8 @@ struct FeaturelineServer::Impl {
         refuse(415, "unsupported_format",
                "the body was sent as a form (curl -d does that); send it as application/octet-stream or a model/* type, "
                "e.g. curl --data-binary @mesh.obj -H 'Content-Type: application/octet-stream'");
+      else if (type == "multipart/form-data")
+        head.files = true;
       else if (type != "application/octet-stream" && !type.empty())
         refuse(415, "unsupported_format", "unsupported Content-Type \"" + quote_client_text(type) + "\"");
     }
@@ -626,6 +631,43 @@ struct FeaturelineServer::Impl {
     }
   }
 
+  // A .gltf posted with the files it names, as multipart/form-data (a browser's FormData, curl
+  // -F): the parts are read within the upload's buffer hold, then packed into one GLB (engine
+  // pack_gltf_files), which is what is stored and prepared, so the session can be rebuilt from
+  // one blob like any upload.
+  std::string read_gltf_files(const httplib::ContentReader& reader, std::size_t length, ByteHold& buffered, bool& body_read) {
+    std::vector<std::pair<std::string, std::string>> parts;
+    std::size_t received = 0;
+    bool buffer_full = false, too_many = false;
+    const bool complete = reader(
+        [&](const httplib::MultipartFormData& part) {
+          if (parts.size() >= kMaxUploadFiles) return !(too_many = true);
+          parts.emplace_back(part.filename.empty() ? part.name : part.filename, std::string());
+          return true;
+        },
+        [&](const char* data, std::size_t size) {
+          received += size;
+          if (received > length || !buffered.hold(received)) return !(buffer_full = true);
+          parts.back().second.append(data, size);
+          return true;
+        });
+    if (buffer_full) throw upload_buffer_full();
+    if (too_many) throw HttpError(400, "malformed_mesh", "an upload of files has at most " + std::to_string(kMaxUploadFiles) + " parts");
+    body_read = complete;
+    if (!complete) throw HttpError(400, "malformed_mesh", "the multipart upload is malformed or ended early");
+    auto is_gltf = [](const std::string& name) {
+      return name.size() > 5 && std::equal(name.end() - 5, name.end(), ".gltf", [](char a, char b) { return std::tolower(a) == b; });
+    };
+    const auto documents = std::count_if(parts.begin(), parts.end(), [&](const auto& p) { return is_gltf(p.first); });
+    if (documents != 1)
+      throw HttpError(415, "unsupported_format", "an upload of files takes one .gltf file and the files it names (" +
+                                                     std::to_string(documents) + " .gltf files were sent)");
+    const auto document = std::find_if(parts.begin(), parts.end(), [&](const auto& p) { return is_gltf(p.first); });
+    const std::string gltf = std::move(document->second);
+    parts.erase(document);
+    return pack_gltf_files(gltf, parts);
+  }
+
   void upload(const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader, bool& body_read) {
     // The head is checked before the body is read. Whatever is refused, a body left unread ends
     // the connection (server/transport.cpp), so its bytes are never parsed as a next request.
@@ -637,10 +679,14 @@ struct FeaturelineServer::Impl {
 
     // The bytes are kept as uploaded: the store holds them so the mesh can be prepared again.
     auto upload = std::make_shared<StoredUpload>();
+    if (head.files) {
+      upload->bytes = read_gltf_files(reader, length, buffered, body_read);
+      format = upload->bytes.rfind("glTF", 0) == 0 ? MeshFormat::glb : MeshFormat::gltf;
+    }
     std::string& body = upload->bytes;
     body.reserve(std::min(length, kUploadChunkBytes));
     bool buffer_full = false;
-    const bool complete = reader([&](const char* data, std::size_t size) {
+    const bool complete = head.files || reader([&](const char* data, std::size_t size) {
       if (body.size() + size > length) return false;
       // Grown as bytes arrive, and held by capacity: what the string has really allocated.
       if (body.size() + size > body.capacity()) {
@@ -652,7 +698,7 @@ struct FeaturelineServer::Impl {
       return true;
     });
     if (buffer_full) throw upload_buffer_full();
-    body_read = complete && body.size() == length;
+    if (!head.files) body_read = complete && body.size() == length;
     if (!body_read) {
       throw HttpError(400, "malformed_mesh", "the upload ended after " + std::to_string(body.size()) + " of " +
                                                  std::to_string(length) + " bytes");

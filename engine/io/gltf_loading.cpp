@@ -18,11 +18,13 @@
 #include <dlfcn.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "engine/errors.h"
 #include "engine/io/byte_order.h"
@@ -202,6 +204,28 @@ std::string_view prepare_gltf_input(std::string_view bytes, bool binary, std::st
 
 }  // namespace
 
+namespace {
+
+// A buffer URI naming a file beside the document (not data:, not a URL or an absolute path), as
+// the file name it refers to: percent-escapes decoded, no directory part allowed.
+std::optional<std::string> relative_file(const std::string& uri) {
+  if (uri.rfind("data:", 0) == 0 || uri.find("://") != std::string::npos || uri.empty() || uri[0] == '/') return std::nullopt;
+  std::string name;
+  for (std::size_t i = 0; i < uri.size(); ++i) {
+    if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+      name += static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      name += uri[i];
+    }
+  }
+  if (name.rfind("./", 0) == 0) name = name.substr(2);
+  return name;
+}
+
+}  // namespace
+
 tinygltf::Model load_gltf_model(std::string_view bytes, bool binary) {
   check_tinygltf_copy();
   const std::string name = display_name(binary ? MeshFormat::glb : MeshFormat::gltf);
@@ -231,7 +255,8 @@ tinygltf::Model load_gltf_model(std::string_view bytes, bool binary) {
     if (reason.size() > 300) reason = reason.substr(0, 300) + "...";
     if (reason.find("FS callback") != std::string::npos || reason.find("File read error") != std::string::npos ||
         reason.find("Failed to load external") != std::string::npos) {
-      throw MeshFormatError(name + " file refers to an external file for a buffer, which is never read (only embedded data and data: URIs are allowed).");
+      throw MeshFormatError(name + " file refers to an external file for a buffer, which is never read (only embedded data and data: URIs "
+                            "are allowed; upload the .gltf together with the files it names).");
     }
     throw MeshFormatError(name + " file could not be parsed: " + (reason.empty() ? std::string("unknown error") : reason));
   }
@@ -239,3 +264,62 @@ tinygltf::Model load_gltf_model(std::string_view bytes, bool binary) {
 }
 
 }  // namespace featureline::detail
+
+namespace featureline {
+
+std::string pack_gltf_files(std::string_view gltf, const std::vector<std::pair<std::string, std::string>>& files) {
+  detail::check_json_depth(gltf, MeshFormat::gltf);
+  nlohmann::json doc = nlohmann::json::parse(gltf.begin(), gltf.end(), nullptr, false);
+  if (!doc.is_object()) throw MeshFormatError("glTF file is not a JSON object.");
+  auto find_file = [&](const std::string& name) -> const std::string* {
+    for (const auto& [file_name, bytes] : files)
+      if (file_name == name) return &bytes;
+    return nullptr;
+  };
+  nlohmann::json& buffers = doc["buffers"];
+  if (!buffers.is_array()) return std::string(gltf);
+  // The files' buffers are laid end to end in the GLB's one binary chunk (buffer 0); the other
+  // buffers (data: URIs) follow it, renumbered.
+  std::string bin;
+  std::vector<std::int64_t> new_index(buffers.size(), -1), offset(buffers.size(), 0);
+  nlohmann::json kept = nlohmann::json::array();
+  std::size_t from_files = 0;
+  for (std::size_t i = 0; i < buffers.size(); ++i) {
+    const nlohmann::json& buffer = buffers[i];
+    const std::optional<std::string> name = buffer.is_object() && buffer.contains("uri") && buffer["uri"].is_string()
+                                                ? detail::relative_file(buffer["uri"])
+                                                : std::nullopt;
+    if (!name) {
+      new_index[i] = -2;  // numbered once the binary chunk's place is known
+      kept.push_back(buffer);
+      continue;
+    }
+    const std::string* bytes = find_file(*name);
+    if (bytes == nullptr)
+      throw MeshFormatError("glTF file's buffer " + std::to_string(i) + " is in \"" + name->substr(0, 200) +
+                            "\", which was not uploaded with it (send the .gltf and its .bin files together).");
+    while (bin.size() % 4 != 0) bin += '\0';
+    offset[i] = std::int64_t(bin.size());
+    bin += *bytes;
+    new_index[i] = 0;
+    ++from_files;
+  }
+  if (from_files == 0) return std::string(gltf);
+  std::int64_t next = 1;
+  for (auto& index : new_index)
+    if (index == -2) index = next++;
+  nlohmann::json packed = nlohmann::json::array({{{"byteLength", bin.size()}}});
+  for (auto& buffer : kept) packed.push_back(std::move(buffer));
+  buffers = std::move(packed);
+  if (doc.contains("bufferViews") && doc["bufferViews"].is_array())
+    for (auto& view : doc["bufferViews"]) {
+      if (!view.is_object() || !view.contains("buffer") || !view["buffer"].is_number_unsigned()) continue;
+      const std::size_t b = view["buffer"].get<std::size_t>();
+      if (b >= new_index.size()) continue;  // tinygltf refuses it when the packed file is read
+      view["buffer"] = new_index[b];
+      if (new_index[b] == 0) view["byteOffset"] = view.value("byteOffset", std::int64_t(0)) + offset[b];
+    }
+  return detail::build_glb(doc.dump(), bin);
+}
+
+}  // namespace featureline

@@ -1009,7 +1009,8 @@ TEST(MeshIoGltf, ExternalBufferUrisAreNeverRead) {
   OpenWatch watch(secret);
   ASSERT_TRUE(watch.ok());
   const std::string expected =
-      "glTF file refers to an external file for a buffer, which is never read (only embedded data and data: URIs are allowed).";
+      "glTF file refers to an external file for a buffer, which is never read (only embedded data and data: URIs are allowed; "
+      "upload the .gltf together with the files it names).";
   for (const std::string& uri : {secret, "file://" + secret, std::string("/etc/passwd"), std::string("file:///etc/passwd"),
                                 std::string("../../../../etc/passwd"), std::string("secret.bin")}) {
     SCOPED_TRACE(uri);
@@ -1020,6 +1021,35 @@ TEST(MeshIoGltf, ExternalBufferUrisAreNeverRead) {
   }
   EXPECT_FALSE(watch.touched()) << "the glTF reader opened an external buffer file";
   EXPECT_TRUE(watch.notices_a_real_open());
+}
+
+// A .gltf uploaded with its .bin files: packed into one GLB whose geometry is the document's.
+TEST(MeshIoGltf, AGltfAndItsBinFilesPackIntoOneGlb) {
+  const std::string bin = quad_buffer({0, 1, 2});
+  const std::string embedded = gltf_json(bin, 3, one_triangle_mesh);
+  const RawMesh expected = read_mesh(embedded, MeshFormat::gltf);
+  const std::string external = gltf_json(bin, 3, one_triangle_mesh, "scene%20data.bin");
+  const std::string packed = pack_gltf_files(external, {{"texture.png", "not needed"}, {"scene data.bin", bin}});
+  ASSERT_EQ(packed.substr(0, 4), "glTF");
+  const RawMesh mesh = read_mesh(packed, MeshFormat::glb);
+  EXPECT_EQ(mesh.positions, expected.positions);
+  EXPECT_EQ(mesh.triangles, expected.triangles);
+
+  // A data: buffer before the file's: the file's becomes buffer 0 (the GLB's binary chunk), the
+  // data: one buffer 1, and the views follow.
+  std::string mixed = external;
+  mixed.replace(mixed.find(R"("buffers":[{)"), 12,
+                R"("buffers":[{"uri":"data:application/octet-stream;base64,)" + base64("unused") + R"(","byteLength":6},{)");
+  for (std::size_t at; (at = mixed.find(R"("buffer":0)")) != std::string::npos;) mixed.replace(at, 10, R"("buffer":1)");
+  const RawMesh from_mixed = read_mesh(pack_gltf_files(mixed, {{"scene data.bin", bin}}), MeshFormat::glb);
+  EXPECT_EQ(from_mixed.positions, expected.positions);
+  EXPECT_EQ(from_mixed.triangles, expected.triangles);
+
+  EXPECT_THROW_EXACT(pack_gltf_files(external, {{"other.bin", bin}}), MeshFormatError,
+                     "glTF file's buffer 0 is in \"scene data.bin\", which was not uploaded with it (send the .gltf and its "
+                     ".bin files together).");
+  EXPECT_EQ(pack_gltf_files(embedded, {{"scene data.bin", bin}}), embedded) << "nothing to pack: the document as it is";
+  EXPECT_THROW(pack_gltf_files("{\"buffers\": [", {}), MeshFormatError);
 }
 
 TEST(MeshIoGltf, HostileAccessorsAndViews) {

@@ -116,6 +116,27 @@ http "$T/sniff2.json" --data-binary @"$MESHES/Box.glb" -H 'Content-Type: applica
 expect "upload GLB as octet-stream without format" 201 - POST /v1/meshes "$T/sniff2.json"
 check_eq "octet-stream GLB sniffed as glb" "$(jq -r .format "$T/sniff2.json")" glb
 
+# A .gltf with its .bin as multipart/form-data (curl -F, a browser's FormData): Box.glb split
+# into Box.gltf, whose buffer is "Box 0.bin".
+python3 - "$MESHES/Box.glb" "$T" <<'PY'
+import json, struct, sys
+data = open(sys.argv[1], 'rb').read()
+json_length = struct.unpack('<I', data[12:16])[0]
+doc = json.loads(data[20:20 + json_length])
+bin_length = struct.unpack('<I', data[20 + json_length:24 + json_length])[0]
+doc['buffers'][0]['uri'] = 'Box%200.bin'
+open(sys.argv[2] + '/Box.gltf', 'w').write(json.dumps(doc))
+open(sys.argv[2] + '/Box 0.bin', 'wb').write(data[28 + json_length:28 + json_length + bin_length])
+PY
+http "$T/files.json" -F "files=@$T/Box.gltf" -F "files=@\"$T/Box 0.bin\"" "$B/v1/meshes"
+expect "upload a .gltf with its .bin (multipart)" 201 - POST /v1/meshes "$T/files.json"
+check_eq "... packed into one GLB: Box's 8 vertices, 12 faces" "$(jq -c '[.format, .vertices, .faces]' "$T/files.json")" '["glb",8,12]'
+http "$T/files2.json" -F "files=@$T/Box.gltf" "$B/v1/meshes"
+expect "a .gltf without the .bin it names" 400 malformed_mesh POST /v1/meshes "$T/files2.json"
+check "... naming the missing file" grep -q 'Box 0.bin' "$T/files2.json"
+http "$T/files3.json" -F "files=@$T/Box.gltf" -F "more=@$T/Box.gltf;filename=Other.gltf" "$B/v1/meshes"
+expect "two .gltf files in one upload" 415 unsupported_format POST /v1/meshes "$T/files3.json"
+
 # Binary STL, written from fandisk.off (no STL among the shared meshes): welded back to 6475.
 perl -e '
   local $/; open my $f, "<", $ARGV[0] or die; my $s = <$f>; $s =~ s/#[^\n]*//g;

@@ -3,8 +3,9 @@
 // framed by both fields of view), key markers hidden behind a CAD part (faint, not pickable),
 // the status line in view however the panel scrolls, keys typed by vertex id, renamed lines,
 // camera presets and the orthographic view saved with the session, "+ Line" without a mesh,
-// what Delete and C say, and the line downloads the server writes (OBJ, PLY, polylines, GLB)
-// with the page's 1-based names. The real server and Debian's Chromium.
+// what Delete and C say, the line downloads the server writes (OBJ, PLY, polylines, GLB)
+// with the page's 1-based names, and a .gltf opened with its .bin. The real server and
+// Debian's Chromium.
 //
 //   node tests/web/usability_e2e.mjs
 //
@@ -336,6 +337,32 @@ await h.run(async () => {
     'loading the session in a fresh page restores the orthographic view');
   check((await api(page2).state()).lines[0].name === 'rim edge', 'and the line names');
   await page2.close();
+
+  // ---- a .gltf chosen with its .bin opens (the server packs the two into one GLB) --------------
+  {
+    const boxGlb = fs.readFileSync(sharedMesh('Box.glb'));
+    const jsonLength = boxGlb.readUInt32LE(12);
+    const doc = JSON.parse(boxGlb.subarray(20, 20 + jsonLength).toString('utf8'));
+    const binLength = boxGlb.readUInt32LE(20 + jsonLength);
+    doc.buffers[0].uri = 'Box%200.bin';
+    const gltfPath = path.join(h.tmp, 'Box.gltf');
+    const binPath = path.join(h.tmp, 'Box 0.bin');
+    fs.writeFileSync(gltfPath, JSON.stringify(doc));
+    fs.writeFileSync(binPath, boxGlb.subarray(28 + jsonLength, 28 + jsonLength + binLength));
+    const page3 = await h.context.newPage();
+    h.watch(page3);
+    await page3.goto(`${base}/?trace=0`);
+    await until('the third page to start', () => page3.evaluate(() => !!window.featureline && window.featureline.samples.length > 0));
+    await page3.setInputFiles('#file-input', [binPath, gltfPath]);
+    await until('the .gltf with its .bin to open', async () => (await api(page3).state()).mesh?.faceCount === 12, 20000);
+    const opened = await api(page3).state();
+    check(opened.mesh.name === 'Box.gltf' && opened.mesh.vertexCount === 8 && /Opened Box\.gltf/.test(opened.message),
+      `a .gltf chosen with its .bin opens as one mesh (${opened.mesh.vertexCount} vertices, "${opened.message}")`);
+    await page3.setInputFiles('#file-input', [gltfPath]);
+    await until('the lone .gltf to be refused', async () => /upload the \.gltf together with the files it names/.test((await api(page3).state()).message), 20000);
+    ok('the .gltf alone is refused, saying to send it with the files it names');
+    await page3.close();
+  }
 
   check(h.pageErrors.length === 0, 'no uncaught errors in the pages', h.pageErrors.join('\n'));
   const unexpected = h.consoleErrors.filter((t) => !/Failed to load resource/.test(t));

@@ -108,14 +108,23 @@ export function formatOfFileName(name) {
   return MESH_FORMATS.includes(ext) ? ext : null;
 }
 
-// POST /v1/meshes with the file's raw bytes, with upload progress (XMLHttpRequest, since
-// fetch has no upload progress). Resolves to the MeshDescription.
+// A .gltf and the files it names, as the server takes them together: one part per file.
+function filesForm(files) {
+  const form = new FormData();
+  for (const file of files) form.append('files', file, file.name);
+  return form;
+}
+
+// POST /v1/meshes with the file's raw bytes, or with an array of files (a .gltf and its .bin
+// files) as multipart/form-data, with upload progress (XMLHttpRequest, since fetch has no
+// upload progress). Resolves to the MeshDescription.
 export function uploadMesh(body, { format, onProgress } = {}) {
+  const files = Array.isArray(body) ? body : null;
   return new Promise((resolve, reject) => {
     const xhr = new XMLHttpRequest();
-    const query = format ? `?format=${encodeURIComponent(format)}` : '';
+    const query = format && !files ? `?format=${encodeURIComponent(format)}` : '';
     xhr.open('POST', `${API_BASE}/v1/meshes${query}`);
-    xhr.setRequestHeader('Content-Type', 'application/octet-stream');
+    if (!files) xhr.setRequestHeader('Content-Type', 'application/octet-stream');
     xhr.responseType = 'text';
     if (onProgress) {
       xhr.upload.onprogress = (e) => onProgress({ loaded: e.loaded, total: e.lengthComputable ? e.total : 0, phase: 'upload' });
@@ -134,7 +143,7 @@ export function uploadMesh(body, { format, onProgress } = {}) {
     };
     xhr.onerror = () => reject(networkError('the upload failed', 'or the server closed the connection'));
     xhr.onabort = () => reject(new ApiError(0, 'aborted', 'the upload was cancelled'));
-    xhr.send(body);
+    xhr.send(files ? filesForm(files) : body);
   });
 }
 

@@ -43,7 +43,7 @@ export async function openMesh(name, bytes, format, { keepLines = false, confirm
   state.loading = true;
   state.loadingName = name;
   const started = performance.now();
-  const total = bytes.size ?? bytes.byteLength ?? 0;
+  const total = Array.isArray(bytes) ? bytes.reduce((n, f) => n + f.size, 0) : (bytes.size ?? bytes.byteLength ?? 0);
   showMessage(`Opening ${name}…`);
   setProgress(true, 0, `uploading 0% of ${formatBytes(total)}`);
   try {
@@ -172,11 +172,18 @@ export function renderMeshInfo() {
   $('mesh-info').textContent = lines.join('\n');
 }
 
-// Files from the chooser or a drop: the first mesh (or session) file is opened; the user is
-// told when others were left out.
+// Files from the chooser or a drop: a .gltf with other files is opened with them (its .bin
+// files; the server packs them); otherwise the first mesh (or session) file is opened, and the
+// user is told when others were left out.
 export function openFiles(fileList) {
   const files = [...(fileList || [])];
   if (!files.length) return;
+  const gltf = files.find((f) => /\.gltf$/i.test(f.name));
+  if (gltf && files.length > 1) {
+    showMessage(`Opening ${gltf.name} with ${files.length - 1} file(s) beside it.`);
+    openMesh(gltf.name, [gltf, ...files.filter((f) => f !== gltf)], 'gltf');
+    return;
+  }
   const first = files[0];
   const note = files.length > 1 ? `${files.length} files dropped: opening the first, ${first.name} (one at a time). ` : '';
   if (/\.json$/i.test(first.name)) {
