@@ -78,6 +78,7 @@ const std::vector<ExportFormatInfo>& export_format_table() {
       {ExportFormat::obj, ".obj", "model/obj", true, true, true},
       {ExportFormat::ply, ".ply", "text/plain", true, true, true},
       {ExportFormat::polylines, ".polylines.txt", "text/plain", true, false, true},
+      {ExportFormat::csv, ".csv", "text/csv", true, false, true},
   };
   return table;
 }
@@ -185,6 +186,22 @@ std::string lines_to_polylines(const std::vector<FeatureLineResult>& lines) {
   return out;
 }
 
+std::string lines_to_csv(const std::vector<FeatureLineResult>& lines) {
+  std::string out = "line,closed,point,x,y,z,face,b0,b1,b2\n";
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    export_line_points(lines[i], i);  // the same check as the other formats: two points at least
+    for (std::size_t k = 0; k < lines[i].refined.size(); ++k) {
+      const SurfacePoint& p = lines[i].refined[k];
+      out += std::to_string(i) + (lines[i].closed ? ",true," : ",false,") + std::to_string(k);
+      for (double x : {p.position.x(), p.position.y(), p.position.z()}) out += ',', append_number(out, x);
+      out += ',' + std::to_string(p.face);
+      for (double b : p.barycentric) out += ',', append_number(out, b);
+      out += '\n';
+    }
+  }
+  return out;
+}
+
 SegmentedSurface segmented_surface(const PreparedMesh& mesh, const SegmentationResult& result) {
   if (result.remeshed) return {result.positions, result.triangles};
   return {mesh.positions, mesh.triangles};
@@ -245,8 +262,9 @@ std::string export_lines(const std::vector<FeatureLineResult>& lines, ExportForm
     case ExportFormat::obj: return lines_to_obj(lines);
     case ExportFormat::ply: return lines_to_ply(lines);
     case ExportFormat::polylines: return lines_to_polylines(lines);
+    case ExportFormat::csv: return lines_to_csv(lines);
     default:
-      throw InvalidInputError("lines are written here as obj, ply or polylines, not " + to_string(format));
+      throw InvalidInputError("lines are written here as obj, ply, polylines or csv, not " + to_string(format));
   }
 }
 

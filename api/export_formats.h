@@ -1,4 +1,5 @@
-// Files other tools read: feature lines as OBJ polylines, PLY edges and CGAL's `.polylines.txt`;
+// Files other tools read: feature lines as OBJ polylines, PLY edges, CGAL's `.polylines.txt` and
+// CSV rows (spreadsheets, pandas: the surface points with their faces and barycentrics);
 // a segmentation as a PLY with a colour and a label per face and as an OBJ with a group per part.
 // One table names every output format, the JSON and glTF answers written elsewhere
 // (api/feature_line_json.h, api/gltf_export.h) included, with its `?format=` name, file ending
@@ -29,18 +30,20 @@ enum class ExportFormat {
   obj,        ///< Wavefront OBJ: `l` polylines, or `g` groups of faces
   ply,        ///< ASCII PLY: an `edge` element, or faces with colour and label
   polylines,  ///< CGAL's polylines text (Mesh_3 feature input); lines only
+  csv,        ///< one row per refined point: line, point, x, y, z, face, barycentric; lines only
 };
 
 /// The `?format=` names (lower case; parse_export_format accepts any case).
 template <>
 struct EnumNames<ExportFormat> {
-  static constexpr std::array<std::pair<ExportFormat, const char*>, 6> entries{
+  static constexpr std::array<std::pair<ExportFormat, const char*>, 7> entries{
       {{ExportFormat::json, "json"},
        {ExportFormat::glb, "glb"},
        {ExportFormat::gltf, "gltf"},
        {ExportFormat::obj, "obj"},
        {ExportFormat::ply, "ply"},
-       {ExportFormat::polylines, "polylines"}}};
+       {ExportFormat::polylines, "polylines"},
+       {ExportFormat::csv, "csv"}}};
 };
 
 /// What a file holds.
@@ -107,6 +110,12 @@ std::string lines_to_ply(const std::vector<FeatureLineResult>& lines);
 /// the end, as CGAL writes closed polylines.
 /// \throw InvalidInputError for no lines or a line with fewer than two points.
 std::string lines_to_polylines(const std::vector<FeatureLineResult>& lines);
+
+/// CSV with a header row, then one row per refined point of each line: `line` (0-based, the
+/// request's order), `closed` (true/false: a loop does not repeat its first point), `point`
+/// (0-based along the line), x, y, z, `face` and b0, b1, b2 (barycentric coordinates in that
+/// face's corner order). \throw InvalidInputError for a line with fewer than two points
+std::string lines_to_csv(const std::vector<FeatureLineResult>& lines);
 
 /// The labelled surface of a segmentation: in remesh mode the result's own positions and
 /// triangles, in snap mode the prepared mesh's (SegmentationResult::labels index its triangles).

@@ -80,9 +80,11 @@ TEST(ExportFormatTable, NamesExtensionsAndMimeTypes) {
   EXPECT_STREQ(export_format_info(ExportFormat::gltf).mime_type, "model/gltf+json");
   EXPECT_STREQ(export_format_info(ExportFormat::json).mime_type, "application/json");
 
-  EXPECT_EQ(export_format_names(ExportContent::lines), "json, glb, gltf, obj, ply, polylines");
+  EXPECT_EQ(export_format_names(ExportContent::lines), "json, glb, gltf, obj, ply, polylines, csv");
   EXPECT_EQ(export_format_names(ExportContent::segmentation), "json, glb, obj, ply");
-  EXPECT_EQ(export_format_extensions(ExportContent::lines), ".json, .glb, .gltf, .obj, .ply, .polylines.txt");
+  EXPECT_EQ(export_format_extensions(ExportContent::lines), ".json, .glb, .gltf, .obj, .ply, .polylines.txt, .csv");
+  EXPECT_STREQ(export_format_info(ExportFormat::csv).mime_type, "text/csv");
+  EXPECT_FALSE(can_export(ExportFormat::csv, ExportContent::segmentation));
   EXPECT_FALSE(can_export(ExportFormat::polylines, ExportContent::segmentation));
   EXPECT_TRUE(can_export(ExportFormat::ply, ExportContent::segmentation));
   EXPECT_FALSE(export_format_info(ExportFormat::glb).interchange);  // the caller writes it
@@ -137,11 +139,26 @@ TEST(ExportLines, CgalPolylinesRepeatTheFirstPointOfAClosedLine) {
             "4 0 0 0 1 0 0 0 1 0 0 0 0\n");
 }
 
+TEST(ExportLines, CsvHasARowPerPointWithItsFaceAndBarycentrics) {
+  auto lines = hand_built_lines();
+  lines[1].refined[2].face = 7;
+  lines[1].refined[2].barycentric = {0.25, 0.5, 0.25};
+  EXPECT_EQ(lines_to_csv(lines),
+            "line,closed,point,x,y,z,face,b0,b1,b2\n"
+            "0,false,0,0,0.1,-2.5,0,1,0,0\n"
+            "0,false,1,1,0.3333333333333333,1e-20,0,1,0,0\n"
+            "0,false,2,2,0,123456789.125,0,1,0,0\n"
+            "1,true,0,0,0,0,0,1,0,0\n"
+            "1,true,1,1,0,0,0,1,0,0\n"
+            "1,true,2,0,1,0,7,0.25,0.5,0.25\n");
+}
+
 TEST(ExportLines, DispatchByFormatMatchesTheWriters) {
   const auto lines = hand_built_lines();
   EXPECT_EQ(export_lines(lines, ExportFormat::obj), lines_to_obj(lines));
   EXPECT_EQ(export_lines(lines, ExportFormat::ply), lines_to_ply(lines));
   EXPECT_EQ(export_lines(lines, *export_format_from_path("x.polylines.txt")), lines_to_polylines(lines));
+  EXPECT_EQ(export_lines(lines, *export_format_from_path("lines.csv")), lines_to_csv(lines));
   for (const auto format : {ExportFormat::json, ExportFormat::glb, ExportFormat::gltf})
     EXPECT_THROW(export_lines(lines, format), InvalidInputError) << to_string(format);
 }

@@ -263,7 +263,7 @@ expect "?format=json wins over Accept" 200 - POST "$FL" "$T/l5.json"
 check_eq "?format=json answers JSON" "$(header "$T/l5.json" Content-Type)" application/json
 QUERY='?format=stl' lines "$T/l6.json" "$T/r1.json"
 expect "?format=stl on feature-lines" 400 invalid_request POST "$FL" "$T/l6.json"
-check "... naming the formats lines can be" grep -q 'format must be json, glb, gltf, obj, ply, polylines' "$T/l6.json"
+check "... naming the formats lines can be" grep -q 'format must be json, glb, gltf, obj, ply, polylines, csv' "$T/l6.json"
 QUERY='?format=obj' lines "$T/l7.obj" "$T/r1.json"
 check_eq "?format=obj on feature-lines: 200" "$STATUS" 200
 check_eq "?format=obj: Content-Type model/obj" "$(header "$T/l7.obj" Content-Type)" model/obj

@@ -11,7 +11,7 @@ import test from 'node:test';
 import { fileURLToPath } from 'node:url';
 import { guessUpAxis, looksLikeCad, ringNeighbourhood, sharpEdges, strongestFeatureVertex, vertexAdjacency } from '../../web/src/geometry.js';
 import { History } from '../../web/src/history.js';
-import { nameGlbLines, nameObjLines, namePlyLines, objName } from '../../web/src/line_files.js';
+import { nameCsvLines, nameGlbLines, nameObjLines, namePlyLines, objName } from '../../web/src/line_files.js';
 import { buildTriangleGrid, raycastAll, raycastGrid } from '../../web/src/raycast.js';
 import { parseSession, sessionDocument } from '../../web/src/session.js';
 import { oneBasedNumbers, vertexIdProblem } from '../../web/src/text.js';
@@ -211,6 +211,15 @@ test('OBJ and PLY line files get the page\'s names and 1-based line numbers, not
   assert.deepEqual(ply.slice(0, 7), ['ply', 'format ascii 1.0', 'comment Featureline: 2 feature lines',
     'comment the edges\' "line" counts from 1, as the page does:', 'comment line 1: rim edge', 'comment line 2: Line 2', 'element vertex 5']);
   assert.deepEqual(ply.slice(-10), ['0 0 0', '1 0 0', '0 1 0', '1 1 0', '1 2 0', '0 1 1', '2 3 2', '3 4 2', '4 2 2', '']);
+});
+
+// The CSV api/export_formats.cpp writes for the same two lines (points shortened to two each).
+const SERVER_CSV = 'line,closed,point,x,y,z,face,b0,b1,b2\n0,false,0,0,0,0,3,1,0,0\n0,false,1,1,0,0,4,0,1,0\n1,true,0,0,1,0,5,0,0,1\n1,true,1,1,1,0,6,1,0,0\n';
+
+test('CSV rows name their line as the page does (quoted), nothing else changes', () => {
+  assert.equal(nameCsvLines(SERVER_CSV, ['rim "top" edge', 'Line 2']),
+    'line,closed,point,x,y,z,face,b0,b1,b2\n"rim ""top"" edge",false,0,0,0,0,3,1,0,0\n"rim ""top"" edge",false,1,1,0,0,4,0,1,0\n' +
+    '"Line 2",true,0,0,1,0,5,0,0,1\n"Line 2",true,1,1,1,0,6,1,0,0\n');
 });
 
 // A GLB of two line nodes and a binary chunk, as the server lays it out (JSON chunk padded

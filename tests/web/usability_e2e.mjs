@@ -288,6 +288,10 @@ await h.run(async () => {
   const polylines = await downloaded('#download-polylines');
   check(polylines.name === 'fandisk-lines.polylines.txt' && polylines.text === (await serverFile('polylines')) && polylines.text.trim().split('\n').length === 2,
     'the polylines download is the server\'s, one text line per line');
+  const csv = await downloaded('#download-csv');
+  const serverCsv = await serverFile('csv');
+  check(csv.name === 'fandisk-lines.csv' && csv.text === serverCsv.replace(/^0,/gm, '"rim edge",').replace(/^1,/gm, '"Line 2",'),
+    `the CSV download is the server's with the page's names in its line column (${csv.text.split('\n').length - 2} points)`);
   const glb = await downloaded('#download-glb');
   const jsonLength = glb.bytes.readUInt32LE(12);
   const gltf = JSON.parse(glb.bytes.subarray(20, 20 + jsonLength).toString('utf8'));

@@ -1,6 +1,6 @@
-// The server writes the line files (OBJ, PLY, GLB; api/export_formats.h, api/gltf_export.h) and
-// names the lines by their 0-based place in the request: `o line_0`, a PLY edge's `line` 0,
-// the glTF node `feature_line_0`. The page counts from 1 and lets lines be renamed, so the
+// The server writes the line files (OBJ, PLY, GLB, CSV; api/export_formats.h,
+// api/gltf_export.h) and names the lines by their 0-based place in the request: `o line_0`, a
+// PLY edge's `line` 0, the glTF node `feature_line_0`, a CSV row's `line` 0. The page counts from 1 and lets lines be renamed, so the
 // downloaded files carry the page's names instead; nothing else in them changes. No three.js,
 // no DOM (tests/web/modules_test.mjs checks it on the server's own output).
 
@@ -66,11 +66,20 @@ export function nameGlbLines(arrayBuffer, names) {
   return out.buffer;
 }
 
+// A CSV field: quoted, its quotes doubled.
+const csvField = (text) => `"${String(text).replace(/"/g, '""')}"`;
+
+// The CSV's `line` column (0-based places) -> the lines' names.
+export function nameCsvLines(text, names) {
+  return text.replace(/^(\d+),/gm, (field, i) => (names[i] === undefined ? field : `${csvField(names[i])},`));
+}
+
 // The names written into a download of `format`: the text or bytes the server sent, renamed.
 export function nameLinesInFile(format, content, names) {
   if (format === 'obj') return nameObjLines(content, names);
   if (format === 'ply') return namePlyLines(content, names);
   if (format === 'glb') return nameGlbLines(content, names);
+  if (format === 'csv') return nameCsvLines(content, names);
   return content; // polylines: one coordinate list per text line, no names to write
 }
 
@@ -80,4 +89,5 @@ export const LINE_FILE_FORMATS = {
   obj: { extension: '.obj', type: 'model/obj', binary: false },
   ply: { extension: '.ply', type: 'text/plain', binary: false },
   polylines: { extension: '.polylines.txt', type: 'text/plain', binary: false },
+  csv: { extension: '.csv', type: 'text/csv', binary: false },
 };

@@ -108,7 +108,7 @@ function wire() {
   $('decompose').addEventListener('click', decompose);
   $('toolbar-decompose').addEventListener('click', decompose);
   $('download-json').addEventListener('click', () => downloadLines('json'));
-  for (const format of ['glb', 'obj', 'ply', 'polylines']) $(`download-${format}`).addEventListener('click', () => downloadLines(format));
+  for (const format of ['glb', 'obj', 'ply', 'polylines', 'csv']) $(`download-${format}`).addEventListener('click', () => downloadLines(format));
   $('download-segmented').addEventListener('click', downloadSegmented);
   document.querySelector('#legend .legend-bar').style.background = divergingCss();
   // Small windows start with the long sections folded, so the lines stay in view.
