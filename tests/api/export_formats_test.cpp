@@ -416,7 +416,7 @@ TEST(ExportFormatsSample, WritesLinesAndSegmentationsForReadback) {
     std::ofstream(dir / name, std::ios::binary) << text;
     expected["files"][stem + "." + to_string(format)] = name;
   };
-  for (const auto format : {ExportFormat::obj, ExportFormat::ply, ExportFormat::polylines})
+  for (const auto format : {ExportFormat::obj, ExportFormat::ply, ExportFormat::polylines, ExportFormat::csv})
     write("lines", format, export_lines(lines, format));
 
   for (const auto mode : {SegmentationMode::snap, SegmentationMode::remesh}) {

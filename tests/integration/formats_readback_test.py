@@ -11,6 +11,7 @@ independent reader from Debian's packages (scripts/setup.sh installs them):
   lines.ply            Open3D's read_line_set (the `edge` element)
   lines.polylines.txt  no packaged reader (CGAL's is C++ only): parsed by its grammar, one text
                        line per polyline, "N x1 y1 z1 ... xN yN zN"
+  lines.csv            Python's csv module (RFC 4180 rows) and numpy.genfromtxt
   segmentation_*.ply   meshio (faces with red, green, blue and label) and Open3D
   segmentation_*.obj   meshio (`g` groups) and VTK (GroupIds)
 
@@ -22,6 +23,7 @@ Run by ctest (integration.formats_readback) with Debian's interpreter: its modul
 /usr/lib/python3/dist-packages, which another python3 on PATH does not read.
 """
 
+import csv
 import json
 import os
 import subprocess
@@ -167,6 +169,23 @@ class LinesCgalPolylines(unittest.TestCase):
             values = [float(t) for t in tokens[1:]]
             got = [values[3 * i:3 * i + 3] for i in range(n)]
             assert_same(self, got, points + ([points[0]] if closed else []), "points")
+
+
+class LinesCsv(unittest.TestCase):
+    def test_csv_rows_are_the_refined_points_with_faces_and_barycentrics(self):
+        with open(path("lines.csv"), newline="") as f:
+            rows = list(csv.DictReader(f))
+        want = []
+        for i, line in enumerate(EXPECTED["lines"]):
+            refined = line["refined"]
+            for k, (p, face, b) in enumerate(zip(refined["points"], refined["faces"], refined["barycentric"])):
+                want.append([i, "true" if line["closed"] else "false", k] + p + [face] + b)
+        got = [[int(r["line"]), r["closed"], int(r["point"]), float(r["x"]), float(r["y"]), float(r["z"]), int(r["face"]),
+                float(r["b0"]), float(r["b1"]), float(r["b2"])] for r in rows]
+        assert_same(self, got, want, "rows")
+        table = np.genfromtxt(path("lines.csv"), delimiter=",", names=True, dtype=None, encoding="utf-8")
+        self.assertEqual(len(table), len(want))
+        self.assertEqual([float(x) for x in table["x"]], [row[3] for row in want])
 
 
 class Segmentation(unittest.TestCase):
