@@ -4,7 +4,8 @@
 // the pointer leaves the mesh, a click gives the whole rim as one closed line; on the ridge
 // sample a click on the crest traces the ridge border to border; Shift+click turns a traced line
 // into a keyed one (undo brings the traced line back); a click on a flat cap says there is
-// nothing to trace and leaves no edit; T switches to key mode. Prints the hover preview's
+// nothing to trace and leaves no edit; T switches to key mode; on a cube, a traced edge stopped
+// at a corner goes on along the edge clicked next. Prints the hover preview's
 // latency (pointer move to preview drawn). The real server and Debian's Chromium.
 //
 //   node tests/web/trace_e2e.mjs
@@ -41,6 +42,41 @@ function cylinderObj(segments, rows) {
     lines.push(`f ${bottom + 1} ${id(rows, k + 1)} ${id(rows, k)}`);
   }
   return `${lines.join('\n')}\n`;
+}
+
+// The unit cube, each face an n x n grid of quads (two triangles each), as OBJ text, and the
+// 0-based id of each lattice point (i, j, k) on it. Its 12 edges are creases that meet three at
+// a time at the corners.
+function cubeObj(n) {
+  const ids = new Map();
+  const lines = [];
+  const id = (p) => {
+    const key = p.join(',');
+    if (!ids.has(key)) {
+      ids.set(key, ids.size);
+      lines.push(`v ${p.map((c) => c / n).join(' ')}`);
+    }
+    return ids.get(key);
+  };
+  const faces = [];
+  for (let axis = 0; axis < 3; ++axis)
+    for (const side of [0, n]) {
+      const u = (axis + 1) % 3, v = (axis + 2) % 3;
+      for (let i = 0; i < n; ++i)
+        for (let j = 0; j < n; ++j) {
+          const corner = (di, dj) => {
+            const p = [0, 0, 0];
+            p[axis] = side;
+            p[u] = i + di;
+            p[v] = j + dj;
+            return id(p) + 1;
+          };
+          const [a, b, c, d] = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)];
+          if (side === n) faces.push(`f ${a} ${b} ${c}`, `f ${a} ${c} ${d}`);
+          else faces.push(`f ${a} ${c} ${b}`, `f ${a} ${d} ${c}`);
+        }
+    }
+  return { text: `${[...lines, ...faces].join('\n')}\n`, at: (i, j, k) => ids.get([i, j, k].join(',')) };
 }
 
 const median = (xs) => {
@@ -184,4 +220,31 @@ await h.run(async () => {
   const lines = (await state()).lines;
   const k = lines.at(-1);
   check(!k.trace && k.keys.length === 1, 'in key mode a click adds a key to the active line', () => JSON.stringify({ keys: k.keys, trace: k.trace, lines: lines.length }));
+  // ---- a traced line stopped at a junction goes on along the branch clicked next -----------------
+  await page.keyboard.press('t'); // trace mode again
+  const cube = cubeObj(4);
+  const cubeFile = path.join(h.tmp, 'cube.obj');
+  fs.writeFileSync(cubeFile, cube.text);
+  await page.setInputFiles('#file-input', cubeFile);
+  await until('the confirmation', () => page.isVisible('#confirm'), 5000);
+  await page.click('#confirm-ok');
+  await until('the cube to open', async () => (await page.evaluate(() => window.featureline.mesh?.faceCount)) === 192);
+  await idle();
+  // Seen from the front (+z): the top front edge (y = 1, z = 1) and the right front edge (x = 1,
+  // z = 1) meet at the corner (1, 1, 1), where the top right edge meets them too.
+  const corner = cube.at(4, 4, 4);
+  const topEdge = await screenOf(cube.at(2, 4, 4));
+  await page.mouse.click(topEdge.x, topEdge.y);
+  await idle();
+  let c = (await state()).lines.at(-1);
+  check(c?.trace && c.result?.trace.ends.every((e) => e.reason === 'junction') && c.result.trace.ends.some((e) => e.vertex === corner),
+    `a click on the cube's top front edge traces it to the two corners (${JSON.stringify(c?.result?.trace.ends)})`);
+  const rightEdge = await screenOf(cube.at(4, 2, 4));
+  await page.mouse.click(rightEdge.x, rightEdge.y);
+  await idle();
+  const lines2 = (await state()).lines;
+  c = lines2.at(-1);
+  check(!c.trace && c.keys.length === 5 && c.keys[2] === corner && Math.abs((await page.evaluate(() => window.featureline.lines.at(-1).result?.refined.length)) - 2) < 1e-9,
+    `a click on the right front edge continues the line through the corner: two edges, length 2 (${JSON.stringify(c.keys)})`);
+  check(/through the junction at vertex/.test((await state()).message), 'the message says the line went on through the junction');
 });

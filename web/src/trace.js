@@ -5,7 +5,7 @@
 // vertex so moving back and forth asks the server once.
 import * as api from './api.js';
 import { showMessage, state, viewer } from './app.js';
-import { activeLine, addLineUnrecorded, edit, settleIdle } from './lines.js';
+import { activeLine, addLineUnrecorded, edit, isStale, keysAlongTrace, settleIdle } from './lines.js';
 
 // Pointer moves closer together than this (ms) ask for one preview, the last.
 const HOVER_DEBOUNCE_MS = 40;
@@ -118,6 +118,33 @@ export function describeTrace(trace, closed) {
   return a === b ? `both ends at ${a}` : `ends at ${a} and at ${b}`;
 }
 
+// The vertex where the active traced line stopped at a junction and `result` (a trace from a
+// branch there) ends too; null when there is none.
+function sharedJunction(line, result) {
+  if (!line?.trace || !line.result?.trace || isStale(line) || result.closed || line.result.closed) return null;
+  const stops = line.result.trace.ends.filter((e) => e.reason === 'junction').map((e) => e.vertex);
+  return result.trace.ends.map((e) => e.vertex).find((v) => stops.includes(v)) ?? null;
+}
+
+// A second click on a branch beyond the junction where the active traced line stopped
+// continues that line along the branch: both traces become one keyed line through the junction.
+function extendThroughJunction(result) {
+  const line = activeLine();
+  const junction = sharedJunction(line, result);
+  if (junction === null) return false;
+  const before = keysAlongTrace(line.result);
+  const after = keysAlongTrace(result);
+  if (before[0] === junction) before.reverse();
+  if (after[after.length - 1] === junction) after.reverse();
+  edit(`extend ${line.name} through the junction at vertex ${junction}`, () => {
+    line.trace = false;
+    line.closed = false;
+    line.keys = [...before, ...after.slice(1)];
+  });
+  showMessage(`${line.name} goes on through the junction at vertex ${junction} along the branch clicked (now ${line.keys.length} keys).`);
+  return true;
+}
+
 // A click in trace mode: the traced line becomes the active line when that one has no keys, a
 // new line otherwise. Nothing to trace there: a message, and no edit.
 export async function traceClick(vertex) {
@@ -130,6 +157,7 @@ export async function traceClick(vertex) {
       return showMessage(`Tracing from vertex ${vertex} failed: ${e.message}`, { error: true });
     }
     if (!answer.result) return showMessage(`Nothing to trace at vertex ${vertex}: ${answer.error}`, { error: true });
+    if (extendThroughJunction(answer.result)) return;
     const reuse = activeLine()?.keys.length === 0 ? activeLine() : null;
     let line = reuse;
     edit(`trace a line from vertex ${vertex}`, () => {
