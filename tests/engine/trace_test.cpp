@@ -1,4 +1,5 @@
-// Tracing a feature from one key, against known answers: the rounded slab's top outline comes
+// Tracing a feature from one key, against known answers: a capped cylinder's rim traced from one
+// click cuts off its cap; the rounded slab's top outline comes
 // back as the whole closed crease loop (skinny CAD and fine tessellations, and the fine one at
 // 10-20% noise); a cube's edge stops
 // at both corners, where three creases meet; a T of two roof crests is passed straight through
@@ -13,6 +14,7 @@
 #include "api/feature_line_json.h"
 #include "engine/errors.h"
 #include "engine/feature_line.h"
+#include "engine/segmentation.h"
 #include "engine/trace.h"
 #include "tests/support/accuracy_meshes.h"
 #include "tests/support/line_metrics.h"
@@ -96,6 +98,20 @@ TEST(Trace, NoisySlabOutlineIsStillTheWholeLoop) {
       EXPECT_TRUE(same_cycle(trace.vertices, part.top_outline)) << "noise " << noise << " seed " << seed << ": "
                                                                  << trace.vertices.size() << " vertices";
     }
+}
+
+// One click on a capped cylinder's top rim: the closed rim, which decomposes the cylinder into
+// its top cap (one fan of `segments` triangles) and the rest.
+TEST(Trace, OneClickOnACylinderRimCutsOffItsCap) {
+  const int rings = 6, segments = 48;
+  const auto mesh = prepare_mesh(make_cylinder(1, 1, rings, segments, true));
+  const FeatureLineResult line = traced_line(*mesh, std::uint32_t(rings * segments + 7));
+  ASSERT_TRUE(line.closed);
+  EXPECT_EQ(line.initial.vertices.size(), std::size_t(segments));
+  const SegmentationResult parts = segment_mesh(*mesh, {line});
+  ASSERT_EQ(parts.segments.size(), 2u);
+  EXPECT_EQ(parts.segments[1].faces, std::size_t(segments));
+  EXPECT_EQ(parts.segments[0].faces, std::size_t(2 * rings * segments + segments));
 }
 
 TEST(Trace, CubeEdgeStopsAtTheTwoCornersWhereThreeCreasesMeet) {
