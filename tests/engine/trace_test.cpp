@@ -73,6 +73,9 @@ TEST(Trace, SlabOutlineFromOneKeyIsTheWholeClosedCreaseLoop) {
       EXPECT_EQ(trace.ends[0].reason, TraceStop::closed);
       EXPECT_TRUE(trace.junctions.empty());
     }
+    const TraceResult bottom = trace_feature(*mesh, part.bottom_outline[11]);
+    EXPECT_TRUE(bottom.closed);
+    EXPECT_TRUE(same_cycle(bottom.vertices, part.bottom_outline)) << "the bottom loop from a key on it";
     const FeatureLineResult line = traced_line(*mesh, on_edge);
     ASSERT_TRUE(line.trace);
     EXPECT_TRUE(line.closed);
