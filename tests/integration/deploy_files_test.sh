@@ -2,7 +2,11 @@
 # What can be checked of docker/ and deploy/ without a Docker engine: the nginx
 # template renders and passes `nginx -t` as the compose file renders it; the compose file and
 # the Kubernetes manifests parse and describe the topology (3 replicas on the Redis store,
-# liveness and startup on /healthz, readiness on /readyz, hashing on the mesh id, nginx/ingress edge limits); the image is multi-stage
+# liveness and startup on /healthz, readiness on /readyz, hashing on the mesh id, nginx/ingress
+# edge limits) and meet what deploy_yaml_check.py asks of them (scripts/cluster.sh's
+# --http-threads, memory from --cache-mb, preStop and grace period, PodDisruptionBudget, HPA,
+# spread, pinned images, the restricted Pod Security Standard, network policies), each check
+# shown to fail on a copy broken for it; the image is multi-stage
 # and non-root, its build packages are among scripts/setup.sh's, and its runtime packages own
 # every shared library the tested server binary links (ldd + dpkg -S).
 #
@@ -40,58 +44,94 @@ check "nothing outside the state folder is written (no /var paths)" bash -c "! g
 deploy/render-nginx-conf.sh >/dev/null 2>&1
 check_eq "render-nginx-conf.sh without replicas is a usage error" "$?" 2
 
-# ---- compose and Kubernetes: parse and describe the topology
-python3 - >"$TMP/yaml.out" 2>&1 <<'PY'
+# ---- compose and Kubernetes: parse, describe the topology, agree with scripts/cluster.sh, the
+# server's defaults and its image; resources, failover, disruption budget, autoscaling, spread,
+# pinned images, the restricted Pod Security Standard, network policies (deploy_yaml_check.py)
+help=$("$SERVER" --help)
+cache_default=$(grep -oE -- '--cache-mb [^=]*=[0-9]+' <<<"$help" | sed 's/.*=//')
+deadline_default=$(grep -oE -- '--deadline-s [^=]*=[0-9.]+' <<<"$help" | sed 's/.*=//')
+check "the server's --help gives the defaults of --cache-mb and --deadline-s" test -n "$cache_default" -a -n "$deadline_default"
+yaml_check() { python3 "$HERE/deploy_yaml_check.py" "$1" "${cache_default:-1024}" "${deadline_default:-30}"; }
+yaml_check . >"$TMP/yaml.out" 2>&1
+while IFS= read -r line; do
+  case "$line" in
+    "PASS "*) pass "${line#PASS }" ;;
+    "FAIL "*) fail "${line#FAIL }" ;;
+    *) fail "deploy_yaml_check.py: $line" ;;
+  esac
+done <"$TMP/yaml.out"
+check "deploy_yaml_check.py ran its checks" grep -q '^PASS ' "$TMP/yaml.out"
+
+# Each check above can fail: a copy broken in one way fails the check that guards it.
+# mutant NAME EXPECTED_FAILURE FILE PYTHON: PYTHON edits `docs` (the YAML documents of FILE, a
+# list) in place, with obj(kind, name) for a Kubernetes object; FILE = scripts/cluster.sh takes
+# a sed expression instead.
+mutant() {
+  local name=$1 want=$2 file=$3 edit=$4 m="$TMP/mutant"
+  rm -rf "$m"; mkdir -p "$m/scripts"
+  cp -r docker "$m/docker"; cp scripts/cluster.sh "$m/scripts/"; cp CMakeLists.txt "$m/"
+  if [ "$file" = scripts/cluster.sh ]; then sed -i "$edit" "$m/$file"
+  else
+    python3 - "$m/$file" "$edit" <<'PY'
 import sys, yaml
-problems = []
-def need(cond, what):
-    if not cond: problems.append(what)
-
-compose = yaml.safe_load(open("docker/compose.yaml"))
-services = compose.get("services", {})
-need(set(services) == {"redis", "featureline", "nginx"}, "compose services are redis, featureline, nginx: %s" % sorted(services))
-fl = services.get("featureline", {})
-need(fl.get("deploy", {}).get("replicas") == 3, "compose: 3 featureline replicas")
-need(fl.get("build", {}).get("dockerfile") == "docker/Dockerfile.server", "compose builds docker/Dockerfile.server")
-need("redis://redis:6379" in fl.get("command", []), "compose replicas use the Redis store")
-health = " ".join(fl.get("healthcheck", {}).get("test", []))
-need("/readyz" in health and "' 200 '" in health, "compose replica healthcheck asks /readyz for a 200")
-nginx_cmd = " ".join(services.get("nginx", {}).get("command", []))
-need("render-nginx-conf.sh" in nginx_cmd and "featureline:8080" in nginx_cmd, "compose nginx renders the repository's template")
-need("appendonly" not in " ".join(services.get("redis", {}).get("command", [])) and
-     any("redis.conf" in v for v in services.get("redis", {}).get("volumes", [])), "compose Redis uses deploy/redis.conf")
-
-docs = [d for d in yaml.safe_load_all(open("docker/kubernetes.yaml")) if d]
-kinds = {(d["kind"], d["metadata"]["name"]) for d in docs}
-for k in [("Deployment", "featureline"), ("Service", "featureline"), ("StatefulSet", "redis"), ("Service", "redis"),
-          ("Ingress", "featureline"), ("ConfigMap", "ingress-nginx-controller")]:
-    need(k in kinds, "kubernetes: %s %s" % k)
-for d in docs:
-    if d["kind"] == "Deployment":
-        need(d["spec"]["replicas"] >= 2, "kubernetes: several replicas")
-        c = d["spec"]["template"]["spec"]["containers"][0]
-        for probe, path in (("startupProbe", "/healthz"), ("livenessProbe", "/healthz"), ("readinessProbe", "/readyz")):
-            need(c.get(probe, {}).get("httpGet", {}).get("path") == path, "kubernetes: %s on %s" % (probe, path))
-        # The readiness probe waits for /readyz's own store probe (2 s Redis timeout).
-        need(c.get("readinessProbe", {}).get("timeoutSeconds", 1) > 2, "kubernetes: readiness timeout above the store's 2 s")
-        startup = c.get("startupProbe", {})
-        need(startup.get("periodSeconds", 10) * startup.get("failureThreshold", 3) >= 30, "kubernetes: the startup probe allows 30 s")
-        need("redis://redis:6379" in c.get("args", []), "kubernetes replicas use the Redis store")
-        need(d["spec"]["template"]["spec"]["securityContext"].get("runAsNonRoot") is True, "kubernetes: non-root pods")
-    if d["kind"] == "Ingress":
-        a = d["metadata"]["annotations"]
-        need(a.get("nginx.ingress.kubernetes.io/upstream-hash-by") == "$mesh_id", "ingress hashes on $mesh_id")
-        need(a.get("nginx.ingress.kubernetes.io/proxy-body-size") == "256m", "ingress body size limit")
-    if d["kind"] == "ConfigMap":
-        need("$mesh_id" in d["data"].get("http-snippet", ""), "ingress-nginx ConfigMap defines $mesh_id")
-    if d["kind"] == "StatefulSet":
-        args = d["spec"]["template"]["spec"]["containers"][0]["args"]
-        need("noeviction" in args and "appendonly" in " ".join(args), "kubernetes Redis: durable and never evicting")
-print("\n".join(problems) if problems else "ok")
-sys.exit(1 if problems else 0)
+path, edit = sys.argv[1], sys.argv[2]
+docs = [d for d in yaml.safe_load_all(open(path)) if d]
+def obj(kind, name):
+    return next(d for d in docs if d.get("kind") == kind and d["metadata"]["name"] == name)
+exec(edit)
+yaml.safe_dump_all(docs, open(path, "w"), sort_keys=False)
 PY
-check "compose.yaml and kubernetes.yaml parse and describe the topology" test "$(cat "$TMP/yaml.out")" = ok ||
-  sed 's/^/       | /' "$TMP/yaml.out"
+  fi
+  local out; out=$(yaml_check "$m" 2>&1)
+  check "broken copy fails: $name" grep -qF "FAIL $want" <<<"$out" || sed 's/^/       | /' <<<"$out" | grep -v PASS | head -5
+}
+K=docker/kubernetes.yaml C=docker/compose.yaml
+fl_pod='obj("Deployment", "featureline")["spec"]["template"]["spec"]'
+mutant "cluster.sh's --http-threads changed" "compose replicas' --http-threads is scripts/cluster.sh's" \
+  scripts/cluster.sh 's/--http-threads 256/--http-threads 512/'
+mutant "kubernetes replicas without --http-threads" "kubernetes replicas' --http-threads" $K \
+  "a = $fl_pod['containers'][0]['args']; i = a.index('--http-threads'); del a[i:i + 2]"
+mutant "memory limit 1536Mi for a 1024 MiB cache" "kubernetes: memory limit >= 2 x --cache-mb" $K \
+  "$fl_pod['containers'][0]['resources']['limits']['memory'] = '1536Mi'"
+mutant "a larger --cache-mb under the same limit" "kubernetes: memory limit >= 2 x --cache-mb (1536)" $K \
+  "a = $fl_pod['containers'][0]['args']; a[a.index('--cache-mb') + 1] = '1536'"
+mutant "compose memory limit 1536M" "compose replicas' memory limit" $C \
+  "docs[0]['services']['featureline']['deploy']['resources']['limits']['memory'] = '1536M'"
+mutant "no preStop hook" "kubernetes: a preStop hook" $K "del $fl_pod['containers'][0]['lifecycle']"
+mutant "grace period shorter than --deadline-s" "kubernetes: terminationGracePeriodSeconds" $K \
+  "$fl_pod['terminationGracePeriodSeconds'] = 30"
+mutant "the controller's ConfigMap shipped again" "kubernetes: ConfigMap ingress-nginx-controller is in namespace featureline" $K \
+  "docs.append({'apiVersion': 'v1', 'kind': 'ConfigMap', 'metadata': {'name': 'ingress-nginx-controller', 'namespace': 'ingress-nginx'}, 'data': {}})"
+mutant "no PodDisruptionBudget" "kubernetes: PodDisruptionBudget featureline" $K \
+  "docs.remove(obj('PodDisruptionBudget', 'featureline'))"
+mutant "replicas field next to the HPA" "kubernetes: the Deployment leaves the replica count to the HPA" $K \
+  "obj('Deployment', 'featureline')['spec']['replicas'] = 3"
+mutant "no spread across nodes" "kubernetes: replicas spread across nodes" $K "del $fl_pod['topologySpreadConstraints']"
+mutant "server image :latest" "kubernetes featureline/featureline-server: image pinned" $K \
+  "$fl_pod['containers'][0]['image'] = 'featureline-server:latest'"
+mutant "redis:7.0 (not an exact release)" "kubernetes redis/redis: image pinned" $K \
+  "obj('StatefulSet', 'redis')['spec']['template']['spec']['containers'][0]['image'] = 'redis:7.0'"
+mutant "compose nginx unpinned" "compose nginx: image pinned" $C "docs[0]['services']['nginx']['image'] = 'nginx'"
+mutant "Redis allows privilege escalation" "restricted redis/redis: allowPrivilegeEscalation false" $K \
+  "obj('StatefulSet', 'redis')['spec']['template']['spec']['containers'][0]['securityContext']['allowPrivilegeEscalation'] = True"
+mutant "no seccomp profile" "restricted featureline/featureline-server: seccompProfile" $K \
+  "del $fl_pod['securityContext']['seccompProfile']"
+mutant "a capability kept" "restricted featureline/featureline-server: capabilities drop ALL" $K \
+  "$fl_pod['containers'][0]['securityContext']['capabilities'] = {'drop': ['NET_RAW']}"
+mutant "another user than the image's" "kubernetes: the replicas run as the image's user" $K \
+  "$fl_pod['securityContext']['runAsUser'] = 1000"
+mutant "namespace without the restricted label" "kubernetes: the namespace enforces the restricted" $K \
+  "obj('Namespace', 'featureline')['metadata']['labels'] = {}"
+mutant "Redis open to every pod" "kubernetes: a NetworkPolicy admits only the replicas to Redis" $K \
+  "obj('NetworkPolicy', 'redis')['spec']['ingress'][0]['from'] = [{'podSelector': {}}]"
+mutant "replicas open to every address" "kubernetes: a NetworkPolicy admits only the ingress controller" $K \
+  "obj('NetworkPolicy', 'featureline')['spec']['ingress'][0].pop('from')"
+mutant "a Redis password the replicas do not send" "kubernetes replicas: the store URL carries the password" $K \
+  "obj('StatefulSet', 'redis')['spec']['template']['spec']['containers'][0]['args'] += ['--requirepass', 'x']"
+mutant "compose nginx writable" "compose nginx: read-only root file system" $C "del docs[0]['services']['nginx']['read_only']"
+mutant "compose Redis as root" "compose redis: runs as a numeric non-root user" $C "del docs[0]['services']['redis']['user']"
+mutant "compose nginx on Redis' network" "compose: only the replicas share a network with Redis" $C \
+  "docs[0]['services']['nginx']['networks'].append('store')"
 
 # ---- the image
 D=docker/Dockerfile.server
