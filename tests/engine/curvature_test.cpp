@@ -47,11 +47,16 @@ TEST(Curvature, IrregularUvSphereMedianIsOneOverRadius) {
 }
 
 TEST(Curvature, SignFollowsOutwardNormals) {
-  // Reversing every triangle turns the normals inward and flips the sign of H.
+  // Reversing every triangle turns the normals inward and flips the sign of H (when the
+  // preparation keeps the winding; by default it turns a closed part outward again).
   auto raw = make_icosphere(1.0, 2);
   for (auto& t : raw.triangles) std::swap(t[1], t[2]);
-  const auto mesh = prepare_mesh(raw);
-  for (double h : mesh->curvature.mean) EXPECT_NEAR(h, -1.0, 0.02);
+  PrepareOptions keep;
+  keep.orient_outward = false;
+  const auto kept = prepare_mesh(raw, keep);
+  for (double h : kept->curvature.mean) EXPECT_NEAR(h, -1.0, 0.02);
+  const auto turned = prepare_mesh(raw);
+  for (double h : turned->curvature.mean) EXPECT_NEAR(h, 1.0, 0.02);
 }
 
 TEST(Curvature, CylinderSideIsOneOverTwoRadius) {

@@ -75,6 +75,8 @@ declare -a IDS=() KEYS=() LINES=() REPLICA=() UPLOADER=()
 upload() {  # upload FILE KEYS
   http "$T/up.json" --data-binary @"$1" -H 'Content-Type: application/octet-stream' "$FRONT/v1/meshes"
   expect "upload $(basename "$1") through nginx" 201 - POST /v1/meshes "$T/up.json"
+  # nginx's own errors (its 500 page) are explained only in its error log.
+  [ "$STATUS" = 201 ] || tail -n 5 "$STATE/logs/nginx-error.log" 2>/dev/null | sed 's/^/       | nginx: /'
   IDS+=("$(jq -r .mesh_id "$T/up.json")")
   KEYS+=("$2")
   # Uploads go to any replica, which prepares and caches the mesh: it needs no rebuild there.
