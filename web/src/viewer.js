@@ -8,6 +8,7 @@ import { Line2 } from 'three/addons/lines/Line2.js';
 import { LineMaterial } from 'three/addons/lines/LineMaterial.js';
 import { LineGeometry } from 'three/addons/lines/LineGeometry.js';
 import { buildTriangleGrid, raycastGrid } from './raycast.js';
+import { SurfaceLayer } from './surface_layer.js';
 
 // sRGB hex colours (the CSS legend uses the same ones).
 export const COLORS = {
@@ -188,6 +189,7 @@ export class Viewer {
     this.hoverGroup = new THREE.Group();
     this.previewGroup = new THREE.Group(); // the line a click would trace
     this.scene.add(this.meshGroup, this.edgeGroup, this.segmentGroup, this.lineGroup, this.previewGroup, this.keyGroup, this.hoverGroup);
+    this.layers = new SurfaceLayer(this.renderer, [this.meshGroup, this.edgeGroup, this.segmentGroup], [this.lineGroup, this.previewGroup, this.keyGroup, this.hoverGroup]);
     this.upAxis = 'y';
 
     this.raycaster = new THREE.Raycaster();
@@ -272,7 +274,7 @@ export class Viewer {
   render() {
     this.scaleKeyMarkers();
     this.dimHiddenKeys();
-    this.renderer.render(this.scene, this.camera);
+    this.layers.render(this.scene, this.camera);
     this.frames++;
   }
 
@@ -864,7 +866,33 @@ export class Viewer {
       tracePreviewPoints: this.previewGroup.children.length ? this.previewGroup.children[1].geometry.attributes.instanceStart.count + 1 : 0,
       // The lines as drawn: their segments' first and last points (x, y, z), per line and kind.
       drawnLines: this.lineGroup.children.filter((o) => !o.userData.ghost).map((o) => drawnPolyline(o)),
+      surfaceDraws: this.layers.surfaceDraws,
     };
+  }
+
+  // The frame drawn through the surface layer against the scene drawn directly, without the
+  // overlays: the number of pixels that differ (0: the layer shows the surface as it is).
+  surfaceLayerDifference() {
+    const overlays = [this.lineGroup, this.previewGroup, this.keyGroup, this.hoverGroup];
+    const shown = overlays.map((g) => g.visible);
+    overlays.forEach((g) => (g.visible = false));
+    this.render();
+    const layered = this.readFrame();
+    this.renderer.render(this.scene, this.camera);
+    const direct = this.readFrame();
+    overlays.forEach((g, i) => (g.visible = shown[i]));
+    this.render();
+    let differing = 0;
+    for (let i = 0; i < direct.length; i += 4)
+      if (direct[i] !== layered[i] || direct[i + 1] !== layered[i + 1] || direct[i + 2] !== layered[i + 2]) differing++;
+    return { differing, pixels: direct.length / 4 };
+  }
+
+  readFrame() {
+    const gl = this.renderer.getContext();
+    const px = new Uint8Array(gl.drawingBufferWidth * gl.drawingBufferHeight * 4);
+    gl.readPixels(0, 0, gl.drawingBufferWidth, gl.drawingBufferHeight, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    return px;
   }
 
   // Renders now and counts pixels of the line colours (and of the background) in the frame.
@@ -873,8 +901,7 @@ export class Viewer {
     const gl = this.renderer.getContext();
     const w = gl.drawingBufferWidth;
     const h = gl.drawingBufferHeight;
-    const px = new Uint8Array(w * h * 4);
-    gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    const px = this.readFrame();
     const target = (hex) => [(hex >> 16) & 255, (hex >> 8) & 255, hex & 255];
     const initial = target(COLORS.initial);
     const refined = target(COLORS.refined);
