@@ -1,5 +1,6 @@
 // The 3D view: the server's indexed mesh, lit and shaded, with per-vertex or per-face
-// colours, key markers, and the initial and refined lines. Rendering is on demand.
+// colours, key markers, and the initial and refined lines. Rendering is on demand, in two
+// layers: the surface is drawn again only when it changes (surface_layer.js).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
@@ -704,10 +705,9 @@ export class Viewer {
     }
   }
 
-  // One material per look, kept while the mesh is open. Lines and markers used to get new
-  // materials on every refresh; three.js frees a shader program with the last material using
-  // it, so every refresh compiled the line and marker shaders again (0.1-0.3 s a time with
-  // software WebGL).
+  // One material per look, kept while the mesh is open: three.js frees a shader program with
+  // the last material using it, so a new material per object and refresh would compile the
+  // line and marker shaders again on every refresh (0.1-0.3 s a time with software WebGL).
   sharedMaterial(key, create) {
     let material = this.materials.get(key);
     if (!material) {
