@@ -6,8 +6,9 @@
 // the DevTools protocol's TaskDuration). Figures are printed, never asserted: machines are
 // noisy. What is checked: the key ends on the vertex under the final pointer position, the
 // line drawn is the answer for the final keys, the mesh itself was not drawn again while only
-// the key and its line changed, the surface layer shows the mesh as drawing it directly does,
-// and the page raised no errors.
+// the key and its line changed, the surface layer shows the mesh as drawing it directly does
+// (also after colours, shading, edges, the view and the window's size change), and the page
+// raised no errors.
 //
 //   node tests/web/drag_e2e.mjs
 //
@@ -146,6 +147,25 @@ await h.run(async () => {
     check(figures.surfaceDraws === 0, `${mesh.name}: the mesh itself was not drawn again while the key was dragged (drawn ${figures.surfaceDraws} times)`);
     const difference = await page.evaluate(() => window.featureline.surfaceLayerDifference?.() ?? { differing: 'all', pixels: '?' });
     check(difference.differing === 0, `${mesh.name}: the surface layer shows the mesh pixel for pixel as drawing it directly does (${difference.differing} of ${difference.pixels} pixels differ)`);
+  }
+  // ---- the surface is drawn again whenever it changes -------------------------------------------
+  // Whatever changes the surface's picture must show: colours, shading, edges, the view, the size.
+  const changes = [
+    ['curvature colours on', () => page.check('#curvature-toggle')],
+    ['flat shading on', () => page.check('#flat-toggle')],
+    ['sharp edges on', () => page.check('#edges-toggle')],
+    ['the view from the top', () => page.click('#view-top')],
+    ['a smaller window', () => page.setViewportSize({ width: 1100, height: 700 })],
+    ['curvature colours off', () => page.uncheck('#curvature-toggle')],
+  ];
+  for (const [what, change] of changes) {
+    const draws = (await page.evaluate(() => window.featureline.sceneStats())).surfaceDraws;
+    await change();
+    await nextFrame();
+    const now = (await page.evaluate(() => window.featureline.sceneStats())).surfaceDraws;
+    const difference = await page.evaluate(() => window.featureline.surfaceLayerDifference?.() ?? { differing: 'all', pixels: '?' });
+    check(now > draws && difference.differing === 0, `after ${what} the surface is drawn again and matches drawing directly (${difference.differing} pixels differ)`,
+      () => JSON.stringify({ draws, now, difference }));
   }
   await page.screenshot({ path: h.artifact('web-drag.png') });
   console.log('# mesh | answers drawn per second while dragging | main-thread time per move (median) | main-thread time for the drag');
