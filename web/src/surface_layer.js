@@ -25,7 +25,8 @@ void main() {
 
 // What the surface's picture depends on, as one string: when it is unchanged, the texture
 // still holds the right picture. Attribute and material versions count every change made
-// through three.js's needsUpdate.
+// through three.js's needsUpdate, so a change to the surface must set needsUpdate (or add
+// new objects, or change visibility) to be seen; the lights and clear colour are fixed.
 export function surfaceSignature(groups, camera, width, height) {
   const parts = [width, height, ...camera.matrixWorld.elements, ...camera.projectionMatrix.elements];
   for (const group of groups)
@@ -116,11 +117,5 @@ export class SurfaceLayer {
     this.renderer.render(scene, camera);
     this.renderer.setRenderTarget(null);
     all.forEach((g, i) => (g.visible = shown[i]));
-  }
-
-  dispose() {
-    this.target?.depthTexture?.dispose();
-    this.target?.dispose();
-    this.copyMaterial.dispose();
   }
 }
