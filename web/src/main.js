@@ -253,6 +253,7 @@ window.featureline = {
     return viewer.viewState();
   },
   sceneStats: () => viewer.sceneStats(),
+  surfaceLayerDifference: () => viewer.surfaceLayerDifference(),
   probe: () => viewer.probe(),
 };
 

@@ -1,5 +1,6 @@
 // The 3D view: the server's indexed mesh, lit and shaded, with per-vertex or per-face
-// colours, key markers, and the initial and refined lines. Rendering is on demand.
+// colours, key markers, and the initial and refined lines. Rendering is on demand, in two
+// layers: the surface is drawn again only when it changes (surface_layer.js).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
@@ -8,6 +9,7 @@ import { Line2 } from 'three/addons/lines/Line2.js';
 import { LineMaterial } from 'three/addons/lines/LineMaterial.js';
 import { LineGeometry } from 'three/addons/lines/LineGeometry.js';
 import { buildTriangleGrid, raycastGrid } from './raycast.js';
+import { SurfaceLayer } from './surface_layer.js';
 
 // sRGB hex colours (the CSS legend uses the same ones).
 export const COLORS = {
@@ -128,6 +130,35 @@ export function meanEdgeLength(positions, index) {
   return index.length ? sum / index.length : 0;
 }
 
+// What a Line2 draws (for tests): its line and kind, segment count, first and last points.
+function drawnPolyline(line) {
+  const start = line.geometry.attributes.instanceStart;
+  const end = line.geometry.attributes.instanceEnd;
+  const n = start.count;
+  return {
+    lineId: line.userData.lineId,
+    kind: line.userData.kind,
+    stale: line.userData.stale,
+    segments: n,
+    first: n ? [start.getX(0), start.getY(0), start.getZ(0)] : null,
+    last: n ? [end.getX(n - 1), end.getY(n - 1), end.getZ(n - 1)] : null,
+  };
+}
+
+// A polyline's geometry for Line2 (a loop repeats its first point).
+function lineGeometry(points, closed) {
+  const flat = [];
+  for (const p of points) flat.push(p[0], p[1], p[2]);
+  if (closed && points.length > 2) {
+    const a = points[0];
+    const b = points[points.length - 1];
+    if (a[0] !== b[0] || a[1] !== b[1] || a[2] !== b[2]) flat.push(a[0], a[1], a[2]);
+  }
+  const geometry = new LineGeometry();
+  geometry.setPositions(flat);
+  return geometry;
+}
+
 export class Viewer {
   constructor(host) {
     this.host = host;
@@ -159,12 +190,15 @@ export class Viewer {
     this.hoverGroup = new THREE.Group();
     this.previewGroup = new THREE.Group(); // the line a click would trace
     this.scene.add(this.meshGroup, this.edgeGroup, this.segmentGroup, this.lineGroup, this.previewGroup, this.keyGroup, this.hoverGroup);
+    this.layers = new SurfaceLayer(this.renderer, [this.meshGroup, this.edgeGroup, this.segmentGroup], [this.lineGroup, this.previewGroup, this.keyGroup, this.hoverGroup]);
     this.upAxis = 'y';
 
     this.raycaster = new THREE.Raycaster();
     this.mesh = null; // the indexed data {positions, normals, index, ...}
     this.displayMesh = null; // un-indexed copy (per-corner colours), same triangle order
     this.keyMarkerGeometry = new THREE.SphereGeometry(1, 16, 12);
+    this.materials = new Map(); // shared line and marker materials by look
+    this.lineEntries = new Map(); // drawn lines by "lineId:kind": {points, closed, geometry, objects}
     this.hoverKey = null;
     this.selectedKey = null; // {lineId, keyIndex}
     this.renderPending = false;
@@ -241,7 +275,7 @@ export class Viewer {
   render() {
     this.scaleKeyMarkers();
     this.dimHiddenKeys();
-    this.renderer.render(this.scene, this.camera);
+    this.layers.render(this.scene, this.camera);
     this.frames++;
   }
 
@@ -256,6 +290,8 @@ export class Viewer {
     this.clearGroup(this.edgeGroup);
     this.clearGroup(this.hoverGroup);
     this.clearGroup(this.previewGroup);
+    this.disposeSharedMaterials(); // dash lengths follow the mesh's size
+    this.lineEntries = new Map();
     this.hoverKey = null;
     this.selectedKey = null;
     this.mesh = mesh;
@@ -608,7 +644,7 @@ export class Viewer {
       const hidden = this.isOccluded(marker.position);
       marker.userData.hidden = hidden;
       marker.userData.scale = hidden ? HIDDEN_KEY_SCALE : 1;
-      marker.material.opacity = hidden ? HIDDEN_KEY_OPACITY : marker.userData.opacity;
+      marker.material = this.markerMaterial(marker.userData.color, hidden ? HIDDEN_KEY_OPACITY : marker.userData.opacity);
     }
   }
 
@@ -636,10 +672,7 @@ export class Viewer {
   setSnapPreview(vertex) {
     this.clearGroup(this.hoverGroup);
     if (vertex != null && this.mesh) {
-      const marker = new THREE.Mesh(
-        this.keyMarkerGeometry,
-        new THREE.MeshBasicMaterial({ color: COLORS.snapPreview, depthTest: false, transparent: true, opacity: 0.55 }),
-      );
+      const marker = new THREE.Mesh(this.keyMarkerGeometry, this.markerMaterial(COLORS.snapPreview, 0.55));
       marker.position.copy(this.vertexPosition(vertex));
       marker.renderOrder = 3;
       marker.userData = { preview: true, vertex, scale: 0.6 };
@@ -652,88 +685,142 @@ export class Viewer {
   // The line a click here would trace (trace mode), drawn faintly; null draws none.
   setTracePreview(points, closed = false) {
     this.clearGroup(this.previewGroup);
-    if (this.mesh && points?.length >= 2)
-      for (const o of this.makeLine(points, closed, COLORS.tracePreview, 2.5, { active: false, kind: 'preview' })) this.previewGroup.add(o);
+    if (this.mesh && points?.length >= 2) {
+      const geometry = lineGeometry(points, closed);
+      for (const o of this.lineObjects(geometry, COLORS.tracePreview, 2.5, { active: false, kind: 'preview' })) this.previewGroup.add(o);
+    }
     this.requestRender();
   }
 
   // ---- lines and keys -------------------------------------------------------------------
+  // Removes a group's objects, disposing what is theirs alone (not the shared materials and
+  // marker geometry).
   clearGroup(group) {
     for (const child of [...group.children]) {
       group.remove(child);
       child.traverse((o) => {
         if (o.geometry && o.geometry !== this.keyMarkerGeometry) o.geometry.dispose();
-        if (o.material) (Array.isArray(o.material) ? o.material : [o.material]).forEach((m) => m.dispose());
+        if (o.material) (Array.isArray(o.material) ? o.material : [o.material]).forEach((m) => m.userData.shared || m.dispose());
       });
     }
   }
 
-  makeLine(points, closed, color, width, { active, kind, lineId, stale = false }) {
-    const flat = [];
-    for (const p of points) flat.push(p[0], p[1], p[2]);
-    if (closed && points.length > 2) {
-      const a = points[0];
-      const b = points[points.length - 1];
-      if (a[0] !== b[0] || a[1] !== b[1] || a[2] !== b[2]) flat.push(a[0], a[1], a[2]);
+  // One material per look, kept while the mesh is open: three.js frees a shader program with
+  // the last material using it, so a new material per object and refresh would compile the
+  // line and marker shaders again on every refresh (0.1-0.3 s a time with software WebGL).
+  sharedMaterial(key, create) {
+    let material = this.materials.get(key);
+    if (!material) {
+      material = create();
+      material.userData.shared = true;
+      this.materials.set(key, material);
     }
-    const objects = [];
-    // Drawn twice: faintly on top of everything (so a line behind a fold still shows), and
-    // fully where it is visible.
-    for (const ghost of [true, false]) {
-      const geometry = new LineGeometry();
-      geometry.setPositions(flat);
-      // An out-of-date line (its keys changed, the new answer is not in) is drawn dashed.
-      const material = new LineMaterial({
-        color,
-        linewidth: ghost ? width * 0.75 : width,
-        worldUnits: false,
-        transparent: ghost || !active || stale,
-        opacity: ghost ? (active ? 0.35 : 0.2) : stale ? 0.55 : active ? 1 : 0.6,
-        depthTest: !ghost,
-        depthWrite: !ghost,
-        dashed: stale,
-        // Dashes are measured along the line in world units: a fixed share of the mesh's size.
-        dashSize: (this.radius || 1) * 0.025,
-        gapSize: (this.radius || 1) * 0.02,
-      });
-      const line = new Line2(geometry, material);
-      line.computeLineDistances();
+    return material;
+  }
+
+  disposeSharedMaterials() {
+    for (const m of this.materials.values()) m.dispose();
+    this.materials.clear();
+  }
+
+  markerMaterial(color, opacity) {
+    return this.sharedMaterial(`marker:${color}:${opacity}`, () => new THREE.MeshBasicMaterial({ color, depthTest: false, transparent: true, opacity }));
+  }
+
+  // An out-of-date line (its keys changed, the new answer is not in) is drawn dashed; the
+  // ghost is the faint copy drawn over everything.
+  lineMaterial(color, width, { ghost, active, stale }) {
+    return this.sharedMaterial(`line:${color}:${width}:${ghost}:${active}:${stale}`, () => new LineMaterial({
+      color,
+      linewidth: ghost ? width * 0.75 : width,
+      worldUnits: false,
+      transparent: ghost || !active || stale,
+      opacity: ghost ? (active ? 0.35 : 0.2) : stale ? 0.55 : active ? 1 : 0.6,
+      depthTest: !ghost,
+      depthWrite: !ghost,
+      dashed: stale,
+      // Dashes are measured along the line in world units: a fixed share of the mesh's size.
+      dashSize: (this.radius || 1) * 0.025,
+      gapSize: (this.radius || 1) * 0.02,
+    }));
+  }
+
+  // A line is drawn twice from one geometry: faintly on top of everything (so a line behind a
+  // fold still shows), and fully where it is visible.
+  lineObjects(geometry, color, width, { active, kind, lineId, stale = false }) {
+    const objects = [true, false].map((ghost) => {
+      const line = new Line2(geometry, this.lineMaterial(color, width, { ghost, active, stale }));
       line.renderOrder = ghost ? 1 : 2;
       line.userData = { kind, ghost, lineId, active, stale };
       line.name = `${kind}-line`;
-      objects.push(line);
-    }
+      return line;
+    });
+    objects[0].computeLineDistances(); // on the shared geometry: what dashes are measured by
     return objects;
   }
 
-  // lines: [{id, keys, closed, result, stale}], activeId: the active line's id.
+  // The drawn objects of one line's initial or refined polyline: those of the last refresh when
+  // its points are the same (the same answer), else new ones.
+  lineEntry(previous, lineId, kind, points, closed) {
+    const key = `${lineId}:${kind}`;
+    const old = previous.get(key);
+    if (old && old.points === points && old.closed === closed) {
+      previous.delete(key);
+      return [key, old];
+    }
+    return [key, { points, closed, geometry: lineGeometry(points, closed), objects: null }];
+  }
+
+  // lines: [{id, keys, closed, result, stale}], activeId: the active line's id. Only lines
+  // with a new answer get new geometry; the others keep theirs and change look.
   setLines(lines, activeId) {
     if (!this.mesh) return;
-    this.clearGroup(this.lineGroup);
-    this.clearGroup(this.keyGroup);
+    const previous = this.lineEntries;
+    this.lineEntries = new Map();
+    this.lineGroup.clear();
     for (const line of lines) {
       const active = line.id === activeId;
       const r = line.result;
-      if (r && r.initial?.points?.length >= 2)
-        for (const o of this.makeLine(r.initial.points, r.closed, COLORS.initial, 2, { active, kind: 'initial', lineId: line.id, stale: line.stale }))
+      for (const [kind, color, width] of [['initial', COLORS.initial, 2], ['refined', COLORS.refined, 3.5]]) {
+        const points = r?.[kind]?.points;
+        if (!(points?.length >= 2)) continue;
+        const [key, entry] = this.lineEntry(previous, line.id, kind, points, r.closed);
+        const look = { active, kind, lineId: line.id, stale: line.stale };
+        if (!entry.objects) entry.objects = this.lineObjects(entry.geometry, color, width, look);
+        for (const o of entry.objects) {
+          o.material = this.lineMaterial(color, width, { ghost: o.userData.ghost, active, stale: line.stale });
+          Object.assign(o.userData, look);
           this.lineGroup.add(o);
-      if (r && r.refined?.points?.length >= 2)
-        for (const o of this.makeLine(r.refined.points, r.closed, COLORS.refined, 3.5, { active, kind: 'refined', lineId: line.id, stale: line.stale }))
-          this.lineGroup.add(o);
+        }
+        this.lineEntries.set(key, entry);
+      }
+    }
+    for (const gone of previous.values()) gone.geometry.dispose();
+    this.setKeyMarkers(lines, activeId);
+    this.requestRender();
+  }
+
+  // One marker per key, the marker objects reused between refreshes.
+  setKeyMarkers(lines, activeId) {
+    const markers = this.keyGroup.children;
+    let n = 0;
+    for (const line of lines) {
+      const active = line.id === activeId;
       line.keys.forEach((v, i) => {
         const hover = this.hoverKey && this.hoverKey.lineId === line.id && this.hoverKey.keyIndex === i;
         const selected = this.selectedKey && this.selectedKey.lineId === line.id && this.selectedKey.keyIndex === i;
         const color = hover ? COLORS.hoverKey : selected ? COLORS.selectedKey : !active ? COLORS.otherKey : i === 0 ? COLORS.firstKey : COLORS.key;
         const opacity = active ? 1 : 0.85;
-        const marker = new THREE.Mesh(this.keyMarkerGeometry, new THREE.MeshBasicMaterial({ color, depthTest: false, transparent: true, opacity }));
+        if (n === markers.length) this.keyGroup.add(new THREE.Mesh(this.keyMarkerGeometry));
+        const marker = markers[n++];
+        marker.material = this.markerMaterial(color, opacity);
         marker.position.copy(this.vertexPosition(v));
         marker.renderOrder = 3;
-        marker.userData = { lineId: line.id, keyIndex: i, active, vertex: v, opacity };
+        marker.userData = { lineId: line.id, keyIndex: i, active, vertex: v, color, opacity };
         marker.name = 'key';
-        this.keyGroup.add(marker);
       });
     }
-    this.requestRender();
+    while (markers.length > n) this.keyGroup.remove(markers[markers.length - 1]);
   }
 
   // Key markers keep a constant size on screen.
@@ -777,7 +864,35 @@ export class Viewer {
       orbitCenter: this.controls.target.toArray(),
       snapPreview: this.hoverGroup.children[0]?.userData.vertex ?? null,
       tracePreviewPoints: this.previewGroup.children.length ? this.previewGroup.children[1].geometry.attributes.instanceStart.count + 1 : 0,
+      // The lines as drawn: their segments' first and last points (x, y, z), per line and kind.
+      drawnLines: this.lineGroup.children.filter((o) => !o.userData.ghost).map((o) => drawnPolyline(o)),
+      surfaceDraws: this.layers.surfaceDraws,
     };
+  }
+
+  // The frame drawn through the surface layer against the scene drawn directly, without the
+  // overlays: the number of pixels that differ (0: the layer shows the surface as it is).
+  surfaceLayerDifference() {
+    const overlays = [this.lineGroup, this.previewGroup, this.keyGroup, this.hoverGroup];
+    const shown = overlays.map((g) => g.visible);
+    overlays.forEach((g) => (g.visible = false));
+    this.render();
+    const layered = this.readFrame();
+    this.renderer.render(this.scene, this.camera);
+    const direct = this.readFrame();
+    overlays.forEach((g, i) => (g.visible = shown[i]));
+    this.render();
+    let differing = 0;
+    for (let i = 0; i < direct.length; i += 4)
+      if (direct[i] !== layered[i] || direct[i + 1] !== layered[i + 1] || direct[i + 2] !== layered[i + 2]) differing++;
+    return { differing, pixels: direct.length / 4 };
+  }
+
+  readFrame() {
+    const gl = this.renderer.getContext();
+    const px = new Uint8Array(gl.drawingBufferWidth * gl.drawingBufferHeight * 4);
+    gl.readPixels(0, 0, gl.drawingBufferWidth, gl.drawingBufferHeight, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    return px;
   }
 
   // Renders now and counts pixels of the line colours (and of the background) in the frame.
@@ -786,8 +901,7 @@ export class Viewer {
     const gl = this.renderer.getContext();
     const w = gl.drawingBufferWidth;
     const h = gl.drawingBufferHeight;
-    const px = new Uint8Array(w * h * 4);
-    gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    const px = this.readFrame();
     const target = (hex) => [(hex >> 16) & 255, (hex >> 8) & 255, hex & 255];
     const initial = target(COLORS.initial);
     const refined = target(COLORS.refined);
