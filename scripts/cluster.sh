@@ -16,7 +16,7 @@
 # (PID "-" when not running) for every replica started, and "nginx-orphan PID PORT" for each
 # worker of a dead nginx master; it exits 0 when all run, 1 when some do not, 3 when none does.
 # Started as root, nginx's workers run as nobody:nogroup (NGINX_USER overrides), with their
-# temporary files in /run/featureline/nginx-P, which they can reach.
+# temporary files in /var/tmp/featureline/nginx-P, which they can reach.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 
@@ -146,8 +146,9 @@ start_replica() {
 
 # Workers write request bodies and buffered answers there: as root they run as an unprivileged
 # user, who may not traverse the state folder (often under a private home or mktemp folder).
+# On disk, not under /run: that is a small tmpfs on many systems, and bodies reach 256 MB.
 nginx_temp() {
-  if [ "$(id -u)" = 0 ]; then echo "/run/featureline/nginx-$port"; else echo "$state/nginx-temp"; fi
+  if [ "$(id -u)" = 0 ]; then echo "/var/tmp/featureline/nginx-$port"; else echo "$state/nginx-temp"; fi
 }
 
 render_nginx_conf() {
@@ -158,7 +159,8 @@ render_nginx_conf() {
 
 start_nginx() {
   render_nginx_conf
-  mkdir -p "$(nginx_temp)"
+  # Reachable by the workers whatever the caller's umask (077 under some CI shells).
+  (umask 022 && mkdir -p "$(nginx_temp)")
   # -e: the error log from the first line on (nginx would otherwise open /var/log/nginx first).
   "$nginx_bin" -t -q -p "$state" -e "$state/logs/nginx-error.log" -c "$state/nginx.conf" ||
     die "nginx -t refused $state/nginx.conf"

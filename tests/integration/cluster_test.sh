@@ -27,6 +27,9 @@ done
 
 FACTOR=$(time_factor "$SERVER")
 CURL_MAX=$((60 * FACTOR))
+# A strict umask, as some CI shells have: what cluster.sh makes for nginx's unprivileged workers
+# must not depend on the caller's umask (with 077 their temporary folder was unreachable).
+umask 077
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/featureline-cluster.XXXXXX")
 T=$TMP
 STATE="$TMP/state"
@@ -247,7 +250,7 @@ check_eq "nginx runs its 2 workers" "$(echo $workers | wc -w)" 2
 if [ "$(id -u)" = 0 ]; then
   check_eq "started as root, nginx's workers run as nobody" "$worker_users" "nobody "
   check "... and their temporary folder is one they can reach (not the state folder)" \
-    grep -q "client_body_temp_path /run/featureline/nginx-$CLUSTER_PORT/client_body;" "$STATE/nginx.conf"
+    grep -q "client_body_temp_path /var/tmp/featureline/nginx-$CLUSTER_PORT/client_body;" "$STATE/nginx.conf"
   big_id=$(curl -s --max-time "$CURL_MAX" --data-binary @"$MESHES/bunny_closed.off" -H 'Content-Type: application/octet-stream' "$FRONT/v1/meshes" | jq -r '.mesh_id // empty')
   check "an upload over 1 MB (buffered to a temporary file by a worker) goes through" test -n "$big_id"
 else
