@@ -15,7 +15,8 @@
 # status prints one line per process: "nginx PID PORT", "redis PID PORT", "replica I PID PORT"
 # (PID "-" when not running) for every replica started, and "nginx-orphan PID PORT" for each
 # worker of a dead nginx master; it exits 0 when all run, 1 when some do not, 3 when none does.
-# Started as root, nginx's workers run as nobody:nogroup (NGINX_USER overrides), with their
+# Started as root, nginx's workers run as nobody:nogroup (NGINX_USER overrides; root, with a
+# warning, where nobody cannot reach their folder), with their
 # temporary files in /var/tmp/featureline/nginx-P, which they can reach.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -151,16 +152,27 @@ nginx_temp() {
   if [ "$(id -u)" = 0 ]; then echo "/var/tmp/featureline/nginx-$port"; else echo "$state/nginx-temp"; fi
 }
 
+# The workers' user, as root: nobody, when nobody can reach the temporary folder; where a
+# folder above it is closed to others (a chroot whose root is 0700), root, with a warning.
+nginx_workers_user() {
+  [ "$(id -u)" = 0 ] && [ -z "${NGINX_USER:-}" ] || { echo "${NGINX_USER:-}"; return 0; }
+  if runuser -u nobody -- test -w "$(nginx_temp)" 2>/dev/null; then echo "nobody nogroup"; return 0; fi
+  echo "cluster: nginx's workers run as root: user nobody cannot reach $(nginx_temp) (a folder above it is closed to others)" >&2
+  echo root
+}
+
 render_nginx_conf() {
   local servers=() i
   for ((i = 1; i <= replicas; i++)); do servers+=("127.0.0.1:$(replica_port "$i")"); done
-  NGINX_TEMP=$(nginx_temp) "$root/deploy/render-nginx-conf.sh" "$state" "127.0.0.1:$port" "$max_upload_mb" "${servers[@]}" >"$state/nginx.conf"
+  NGINX_USER=$(nginx_workers_user) NGINX_TEMP=$(nginx_temp) \
+    "$root/deploy/render-nginx-conf.sh" "$state" "127.0.0.1:$port" "$max_upload_mb" "${servers[@]}" >"$state/nginx.conf"
 }
 
 start_nginx() {
-  render_nginx_conf
   # Reachable by the workers whatever the caller's umask (077 under some CI shells).
   (umask 022 && mkdir -p "$(nginx_temp)")
+  [ "$(id -u)" = 0 ] && [ -z "${NGINX_USER:-}" ] && chown nobody:nogroup "$(nginx_temp)"
+  render_nginx_conf
   # -e: the error log from the first line on (nginx would otherwise open /var/log/nginx first).
   "$nginx_bin" -t -q -p "$state" -e "$state/logs/nginx-error.log" -c "$state/nginx.conf" ||
     die "nginx -t refused $state/nginx.conf"
