@@ -14,9 +14,7 @@ namespace featureline {
 
 void check_feature_seed_options(const FeatureSeedOptions& options) {
   using O = FeatureSeedOptions;
-  auto check = [](const ValidRange& range, double value, const char* name) {
-    if (!range.contains(value)) throw InvalidInputError(std::string(name) + " must be in " + describe(range));
-  };
+  auto check = [](const ValidRange& range, double value, const char* name) { check_in_range(range, value, name); };
   check(O::max_crease_chains_range, options.max_crease_chains, "max_crease_chains");
   check(O::min_chain_edges_range, options.min_chain_edges, "min_chain_edges");
   check(O::corner_angle_range, options.corner_angle, "corner_angle");

@@ -16,9 +16,7 @@ namespace featureline {
 
 void check_trace_options(const TraceOptions& options) {
   using O = TraceOptions;
-  auto check = [](const ValidRange& range, double value, const char* name) {
-    if (!range.contains(value)) throw InvalidInputError(std::string("trace.") + name + " must be in " + describe(range));
-  };
+  auto check = [](const ValidRange& range, double value, const char* name) { check_in_range(range, value, std::string("trace.") + name); };
   check(O::max_edges_range, options.max_edges, "max_edges");
   check(O::stop_strength_range, options.stop_strength, "stop_strength");
   check(O::min_signal_to_noise_range, options.min_signal_to_noise, "min_signal_to_noise");

@@ -26,6 +26,9 @@ std::string format_number(double x);
 /// "[0, 1)", "(0.01, inf]": the range in interval notation.
 std::string describe(const ValidRange& range);
 
+/// \throw InvalidInputError "<name> must be in <range>" when `value` is outside `range`.
+void check_in_range(const ValidRange& range, double value, const std::string& name);
+
 /// [lo, hi]
 constexpr ValidRange closed_range(double lo, double hi) { return {lo, hi, false, false}; }
 /// [lo, hi)

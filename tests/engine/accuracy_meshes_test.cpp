@@ -94,20 +94,6 @@ void expect_closed_oriented_manifold(const RawMesh& mesh) {
   EXPECT_EQ(v - e + f, 2.0) << "Euler characteristic of a closed genus-0 surface";
 }
 
-// a and b are the same cycle, up to rotation and direction.
-bool same_cycle(std::vector<std::uint32_t> a, const std::vector<std::uint32_t>& b) {
-  if (a.size() != b.size()) return false;
-  for (int direction = 0; direction < 2; ++direction) {
-    for (std::size_t shift = 0; shift < a.size(); ++shift) {
-      bool equal = true;
-      for (std::size_t i = 0; i < a.size() && equal; ++i) equal = a[(i + shift) % a.size()] == b[i];
-      if (equal) return true;
-    }
-    std::reverse(a.begin(), a.end());
-  }
-  return false;
-}
-
 RawMesh unit_square() {
   RawMesh mesh;
   mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};

@@ -39,19 +39,6 @@ int crease_degree(const PreparedMesh& mesh, std::uint32_t v, int sign) {
   return degree;
 }
 
-bool same_cycle(std::vector<std::uint32_t> a, const std::vector<std::uint32_t>& b) {
-  if (a.size() != b.size()) return false;
-  for (int direction = 0; direction < 2; ++direction) {
-    for (std::size_t shift = 0; shift < a.size(); ++shift) {
-      bool equal = true;
-      for (std::size_t i = 0; i < a.size() && equal; ++i) equal = a[(i + shift) % a.size()] == b[i];
-      if (equal) return true;
-    }
-    std::reverse(a.begin(), a.end());
-  }
-  return false;
-}
-
 // Every chain is a run of consecutive crease edges of its sign, whose interior vertices have
 // exactly two such edges and turn by at most the corner angle, and whose open ends are split
 // vertices; closed chains close with a crease edge too.

@@ -26,19 +26,6 @@ namespace {
 using namespace featureline::testing;
 constexpr double kPi = 3.14159265358979323846;
 
-bool same_cycle(std::vector<std::uint32_t> a, const std::vector<std::uint32_t>& b) {
-  if (a.size() != b.size()) return false;
-  for (int direction = 0; direction < 2; ++direction) {
-    for (std::size_t shift = 0; shift < a.size(); ++shift) {
-      bool equal = true;
-      for (std::size_t i = 0; i < a.size() && equal; ++i) equal = a[(i + shift) % a.size()] == b[i];
-      if (equal) return true;
-    }
-    std::reverse(a.begin(), a.end());
-  }
-  return false;
-}
-
 std::vector<Eigen::Vector3d> vertex_positions(const PreparedMesh& mesh, const std::vector<std::uint32_t>& ids) {
   std::vector<Eigen::Vector3d> out;
   for (auto v : ids) out.push_back(mesh.positions[v]);

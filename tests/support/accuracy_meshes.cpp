@@ -410,4 +410,17 @@ std::vector<CreaseChain> find_crease_chains(const RawMesh& mesh, double min_dihe
   return chains;
 }
 
+bool same_cycle(std::vector<std::uint32_t> a, const std::vector<std::uint32_t>& b) {
+  if (a.size() != b.size()) return false;
+  for (int direction = 0; direction < 2; ++direction) {
+    for (std::size_t shift = 0; shift < a.size(); ++shift) {
+      bool equal = true;
+      for (std::size_t i = 0; i < a.size() && equal; ++i) equal = a[(i + shift) % a.size()] == b[i];
+      if (equal) return true;
+    }
+    std::reverse(a.begin(), a.end());
+  }
+  return false;
+}
+
 }  // namespace featureline::testing

@@ -125,6 +125,9 @@ constexpr double kCreaseChainMaxTurnDegrees = 60.0;
 /// `min_edges` edges are dropped.
 std::vector<CreaseChain> find_crease_chains(const RawMesh& mesh, double min_dihedral_degrees, std::size_t min_edges);
 
+/// Whether a and b are the same cycle of ids, up to rotation and direction.
+bool same_cycle(std::vector<std::uint32_t> a, const std::vector<std::uint32_t>& b);
+
 /// Positions of `ids` in `mesh`, in order.
 std::vector<Eigen::Vector3d> positions_of(const RawMesh& mesh, const std::vector<std::uint32_t>& ids);
 
