@@ -100,7 +100,7 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
   SearchScratch& seen = search_scratch();
   seen.begin(mesh.n_vertices());
   std::vector<std::uint32_t> path{from};
-  seen.stamp[from] = seen.generation;
+  seen.mark_seen(from);
   std::vector<std::uint32_t> candidates;
   std::vector<double> angle_to_goal, angle_to_previous, distance, curvature_badness;
   std::vector<double> f_o1, f_o2, f_d, f_c;
@@ -164,7 +164,7 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
       if (F > best_score) best_score = F, best = i;
     }
     const auto next = candidates[best];
-    seen.stamp[next] = seen.generation;
+    seen.mark_seen(next);
     path.push_back(next);
     // Passing the end: once within two edges of v_e, moving clearly away means it went by.
     const double d = (P[to] - P[next]).norm();
@@ -182,18 +182,12 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
                                                              double feature_sign,
                                                              const std::vector<std::uint32_t>* blocked,
                                                              const Cancellation* cancel, double max_cost) {
-  const auto& P = mesh.positions;
   const double floor = feature_weighted ? std::clamp(options.feature_weight_floor, 1e-6, 1.0) : 1.0;
-  // A*: the cheapest possible cost per unit length is `floor`, so floor * |x - goal| never
-  // overestimates and the search stays local to the two keys.
-  auto heuristic = [&](std::uint32_t v) { return floor * (P[to] - P[v]).norm(); };
-  std::uint32_t strength_of = kNoIndex;  // the vertex whose strength `strength_v` holds
-  double strength_v = 0;
+  // The cheapest possible cost per unit length is `floor`: the bound that keeps the search
+  // between the two keys.
   auto edge_cost = [&](std::uint32_t v, std::uint32_t k) {
-    const auto w = mesh.neighbors[k];
-    if (w != to && is_blocked(blocked, w)) return -1.0;
     if (!feature_weighted) return mesh.neighbor_edge_lengths[k];
-    if (strength_of != v) strength_of = v, strength_v = feature_strength(mesh, v, feature_sign);
+    const auto w = mesh.neighbors[k];
     // A crease edge of the line's kind is a feature whatever its ends' curvature says
     // (on skinny CAD triangles the vertex fields are unreliable, a dihedral angle is not).
     const auto crease = mesh.curvature.crease[k];
@@ -201,11 +195,13 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
     // An edge joining two crease vertices without being a crease is a chord across a
     // face (a CAD cap's long diagonal cutting a rounded corner): no feature at all.
     const bool chord = !on_crease && mesh.curvature.on_crease[v] && mesh.curvature.on_crease[w];
-    const double strength = on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v + feature_strength(mesh, w, feature_sign));
+    const double strength = on_crease ? 1.0
+                            : chord   ? 0.0
+                                      : 0.5 * (feature_strength(mesh, v, feature_sign) + feature_strength(mesh, w, feature_sign));
     return mesh.neighbor_edge_lengths[k] * (floor + (1 - floor) * (1 - strength));
   };
-  auto path = cheapest_edge_path(mesh, from, [to](std::uint32_t v) { return v == to; }, edge_cost, heuristic, max_cost,
-                                 cancel);
+  auto enterable = [blocked](std::uint32_t w) { return !is_blocked(blocked, w); };
+  auto path = cheapest_path_between(mesh, from, to, edge_cost, enterable, floor, max_cost, cancel);
   if (path.empty()) return std::nullopt;
   return path;
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <queue>
@@ -17,37 +18,43 @@ namespace featureline {
 
 /// Per-thread search scratch whose reset is O(1): an entry is valid only when its stamp equals
 /// the current generation. Keeps each query's cost proportional to what it visits, not to the
-/// mesh size.
+/// mesh size. One record per vertex, so a visit touches one cache line, not four arrays.
 struct SearchScratch {
-  std::vector<double> cost;
-  std::vector<std::uint32_t> parent;
-  std::vector<std::uint32_t> stamp;
-  std::vector<std::uint32_t> closed_stamp;
+  struct Node {
+    double cost;
+    std::uint32_t parent;
+    std::uint32_t stamp;         ///< == generation: cost and parent are this query's
+    std::uint32_t closed_stamp;  ///< == generation: settled in this query
+  };
+  std::vector<Node> nodes;
   std::uint32_t generation = 0;
 
   /// Starts a new query over n vertices.
   void begin(std::size_t n) {
-    if (stamp.size() < n) {
-      cost.assign(n, 0);
-      parent.assign(n, 0);
-      stamp.assign(n, 0);
-      closed_stamp.assign(n, 0);
+    if (nodes.size() < n) {
+      nodes.assign(n, Node{0, 0, 0, 0});
       generation = 0;
     }
     if (++generation == 0) {  // wrapped: clear once every 4 billion queries
-      std::fill(stamp.begin(), stamp.end(), 0);
-      std::fill(closed_stamp.begin(), closed_stamp.end(), 0);
+      for (auto& node : nodes) node.stamp = node.closed_stamp = 0;
       generation = 1;
     }
   }
-  bool seen(std::uint32_t v) const { return stamp[v] == generation; }
-  bool closed(std::uint32_t v) const { return closed_stamp[v] == generation; }
+  bool seen(std::uint32_t v) const { return nodes[v].stamp == generation; }
+  bool closed(std::uint32_t v) const { return nodes[v].closed_stamp == generation; }
+  void mark_seen(std::uint32_t v) { nodes[v].stamp = generation; }
+  void close(std::uint32_t v) { nodes[v].closed_stamp = generation; }
+  double cost(std::uint32_t v) const { return nodes[v].cost; }
+  std::uint32_t parent(std::uint32_t v) const { return nodes[v].parent; }
+  /// Labels v with (cost, parent) for this query.
+  void label(std::uint32_t v, double cost, std::uint32_t parent) { nodes[v] = Node{cost, parent, generation, nodes[v].closed_stamp}; }
 };
 
 /// This thread's scratch (one per thread: the server runs searches on several threads at once).
-inline SearchScratch& search_scratch() {
-  thread_local SearchScratch s;
-  return s;
+/// `which` 1 is a second one, for the backward half of a search from both ends.
+inline SearchScratch& search_scratch(int which = 0) {
+  thread_local SearchScratch s[2];
+  return s[which];
 }
 
 /// The cheapest path over mesh edges from `from` to the first vertex `is_goal(v)` accepts, both
@@ -64,9 +71,7 @@ std::vector<std::uint32_t> cheapest_edge_path(const PreparedMesh& mesh, std::uin
   s.begin(mesh.n_vertices());
   using Entry = std::pair<double, std::uint32_t>;  // (cost + heuristic, vertex)
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
-  s.cost[from] = 0;
-  s.parent[from] = from;
-  s.stamp[from] = s.generation;
+  s.label(from, 0, from);
   open.emplace(heuristic(from), from);
   std::size_t settled = 0;
   std::uint32_t found = from;
@@ -75,7 +80,7 @@ std::vector<std::uint32_t> cheapest_edge_path(const PreparedMesh& mesh, std::uin
     const std::uint32_t v = open.top().second;
     open.pop();
     if (s.closed(v)) continue;
-    s.closed_stamp[v] = s.generation;
+    s.close(v);
     if ((++settled & 4095) == 0) throw_if_cancelled(cancel);
     if (is_goal(v)) {
       found = v;
@@ -87,12 +92,10 @@ std::vector<std::uint32_t> cheapest_edge_path(const PreparedMesh& mesh, std::uin
       if (s.closed(w)) continue;
       const double step = edge_cost(v, k);
       if (step < 0) continue;
-      const double cost = s.cost[v] + step;
+      const double cost = s.cost(v) + step;
       if (cost > max_cost) continue;
-      if (!s.seen(w) || cost < s.cost[w]) {
-        s.stamp[w] = s.generation;
-        s.cost[w] = cost;
-        s.parent[w] = v;
+      if (!s.seen(w) || cost < s.cost(w)) {
+        s.label(w, cost, v);
         open.emplace(cost + heuristic(w), w);
       }
     }
@@ -100,9 +103,84 @@ std::vector<std::uint32_t> cheapest_edge_path(const PreparedMesh& mesh, std::uin
   std::vector<std::uint32_t> path;
   if (!reached) return path;
   path.push_back(found);
-  while (path.back() != from) path.push_back(s.parent[path.back()]);
+  while (path.back() != from) path.push_back(s.parent(path.back()));
   std::reverse(path.begin(), path.end());
   return path;
+}
+
+/// The cheapest path over mesh edges between `from` and `to`, both included; empty when none
+/// costs at most `max_cost`. A* from both ends at once with the average potential
+/// p(v) = slope (|v - to| - |v - from|) / 2 (Ikeda et al. 1994): forward keys g_f + p, backward
+/// keys g_b - p, both consistent, so the search stops once the two smallest keys sum to the best
+/// path found. Where no feature guides it a one-sided search floods a disc as wide as the segment
+/// is long; the two halves flood two discs half as wide.
+///  - `edge_cost(v, k)`: cost of the edge between v and mesh.neighbors[k], the same both ways;
+///    negative to skip it;
+///  - `enterable(w)`: whether a path may pass through w (its two ends always may);
+///  - `slope`: no edge costs less than `slope` times its length.
+/// Settles vertices in (key, id) order on the side with the smaller key, so ties resolve the same
+/// way on every run. Checks `cancel` every 4096 settled vertices.
+template <class EdgeCost, class Enterable>
+std::vector<std::uint32_t> cheapest_path_between(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
+                                                 EdgeCost&& edge_cost, Enterable&& enterable, double slope,
+                                                 double max_cost, const Cancellation* cancel = nullptr) {
+  if (from == to) return {from};
+  const auto& P = mesh.positions;
+  const auto potential = [&](std::uint32_t v) {
+    return 0.5 * slope * ((P[to] - P[v]).norm() - (P[from] - P[v]).norm());
+  };
+  using Entry = std::pair<double, std::uint32_t>;  // (cost + signed potential, vertex)
+  using Queue = std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>>;
+  SearchScratch* side[2] = {&search_scratch(0), &search_scratch(1)};
+  Queue open[2];
+  const std::uint32_t start[2] = {from, to};
+  const double direction[2] = {1, -1};
+  for (int d = 0; d < 2; ++d) {
+    side[d]->begin(mesh.n_vertices());
+    side[d]->label(start[d], 0, start[d]);
+    open[d].emplace(direction[d] * potential(start[d]), start[d]);
+  }
+  double best = HUGE_VAL;
+  std::uint32_t meet = from;
+  bool met = false;  // both sides labelled `meet`, at a total cost `best` within max_cost
+  std::size_t settled = 0;
+  while (!open[0].empty() && !open[1].empty() && open[0].top().first + open[1].top().first < best) {
+    const int d = open[0].top().first <= open[1].top().first ? 0 : 1;
+    SearchScratch& s = *side[d];
+    const SearchScratch& other = *side[1 - d];
+    const std::uint32_t v = open[d].top().second;
+    open[d].pop();
+    if (s.closed(v)) continue;
+    s.close(v);
+    if ((++settled & 4095) == 0) throw_if_cancelled(cancel);
+    for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) {
+      const auto w = mesh.neighbors[k];
+      if (s.closed(w) || !(w == from || w == to || enterable(w))) continue;
+      const double step = edge_cost(v, k);
+      if (step < 0) continue;
+      const double cost = s.cost(v) + step;
+      if (!(cost <= max_cost) || (s.seen(w) && !(cost < s.cost(w)))) continue;  // NaN costs too
+      s.label(w, cost, v);
+      open[d].emplace(cost + direction[d] * potential(w), w);
+      if (other.seen(w) && cost + other.cost(w) < best && cost + other.cost(w) <= max_cost)
+        best = cost + other.cost(w), meet = w, met = true;
+    }
+  }
+  std::vector<std::uint32_t> path;
+  if (!met) return path;
+  for (std::uint32_t v = meet; v != from; v = side[0]->parent(v)) path.push_back(v);
+  path.push_back(from);
+  std::reverse(path.begin(), path.end());
+  for (std::uint32_t v = meet; v != to;) path.push_back(v = side[1]->parent(v));
+  return path;
+}
+
+/// The shortest path by edge length between two vertices, no longer than `max_length`.
+inline std::vector<std::uint32_t> shortest_path_between(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
+                                                        double max_length) {
+  return cheapest_path_between(
+      mesh, from, to, [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths[k]; },
+      [](std::uint32_t) { return true; }, 1.0, max_length);
 }
 
 /// The shortest path by edge length from `from` to the first vertex `is_goal` accepts, no

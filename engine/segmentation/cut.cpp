@@ -40,7 +40,7 @@ void extend_chain(const PreparedMesh& mesh, VertexChain& chain, std::uint32_t v,
     chain.linked.push_back(1);
     return;
   }
-  const auto path = shortest_path_to(mesh, last, [v](std::uint32_t w) { return w == v; }, HUGE_VAL);
+  const auto path = shortest_path_between(mesh, last, v, HUGE_VAL);
   if (path.empty()) {  // across parts of the mesh that share no edge: a gap in the chain
     ++gaps;
     chain.vertices.push_back(v);

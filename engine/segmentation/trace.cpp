@@ -222,7 +222,7 @@ std::uint32_t Tracer::face_with_edge(std::uint32_t a, std::uint32_t b) const {
 Traced Tracer::along_edges(const SurfaceLocation& from, const SurfaceLocation& to, std::vector<TraceStep>& steps) const {
   const std::uint32_t a = nearest_vertex(from), b = nearest_vertex(to);
   const auto path = a == b ? std::vector<std::uint32_t>{a}
-                           : shortest_path_to(mesh_, a, [b](std::uint32_t v) { return v == b; }, HUGE_VAL);
+                           : shortest_path_between(mesh_, a, b, HUGE_VAL);
   if (path.empty()) {
     steps.push_back({to, to.home, true});
     return Traced::gap;
