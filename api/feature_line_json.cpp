@@ -50,6 +50,7 @@ json feature_line_to_json(const FeatureLineResult& r) {
                              {"reason", p.reason},
                              {"iterations", p.iterations},
                              {"iteration_cap", p.iteration_cap},
+                             {"featureless", p.featureless},
                              {"initial_strength", p.initial_strength},
                              {"refined_strength", p.refined_strength}});
     iteration_caps += p.iteration_cap ? 1 : 0;

@@ -214,6 +214,11 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
       option<O>("snake.max_step", within(S::max_step_range, 1e-3, kSnakeMaxStepCap), "Largest move of a point in one iteration (edge lengths)", "", &O::snake,
                 &S::max_step),
       option<O>("snake.iterations", within(S::max_iterations_range, kEngineEnd, kSnakeIterationsCap), "Iteration cap per piece", "--iterations", &O::snake, &S::max_iterations),
+      option<O>("snake.featureless_below", within(S::featureless_below_range, kEngineEnd, 4), "A strip whose 90th percentile of "
+                "feature strength (in units of the mesh's 90th percentile of |C|) is below this has no feature: its snake "
+                "only smooths the line (0: off)", "", &O::snake, &S::featureless_below),
+      option<O>("snake.featureless_iterations", within(S::max_iterations_range, kEngineEnd, kSnakeIterationsCap),
+                "Iteration cap on a featureless strip", "", &O::snake, &S::featureless_iterations),
       option<O>("snake.tolerance", {0, 10}, "Stop when the line's shape changes less than this per iteration (edge "
                 "lengths)", "", &O::snake, &S::tolerance),
       option<O>("snake.spacing", within(S::spacing_range, kSnakeSpacingCap, 10), "Distance between snake points (edge lengths)", "--spacing", &O::snake,

@@ -166,7 +166,9 @@ void snake_on_strip(const LineRun& run, const FeatureStrip& strip, const FlatStr
     work.points = map_to_surface(run.pm, strip, snake.points);
     result.iterations += snake.iterations;
     work.report.iterations = snake.iterations;
-    work.report.iteration_cap = !snake.converged && snake.iterations >= run.snake.max_iterations;
+    work.report.featureless = snake.featureless;
+    work.report.iteration_cap =
+        !snake.converged && !snake.featureless && snake.iterations >= run.snake.max_iterations;
     work.report.refined_strength = mean_feature_strength(run.pm, work.points, run.snake.feature_sign, run.snake.curvature_cap);
     localize_on_crest(run, strip, flat, snake, work);
     if (work.report.refined_strength < run.options.keep_initial_below * work.report.initial_strength) {

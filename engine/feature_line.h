@@ -74,6 +74,9 @@ struct PieceReport {
   std::string reason;              ///< why the initial line was kept
   int iterations = 0;              ///< snake iterations
   bool iteration_cap = false;      ///< the snake stopped at its iteration cap, not converged
+  /// The strip held no feature (SnakeOptions::featureless_below): the snake only smoothed the
+  /// initial line, in at most featureless_iterations
+  bool featureless = false;
   double initial_strength = 0;     ///< mean feature strength along the initial line
   double refined_strength = 0;     ///< ... along the snake's line (0 when not refined)
 };

@@ -1,6 +1,7 @@
 #include "engine/feature_strip.h"
 
 #include <algorithm>
+#include <optional>
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -379,10 +380,15 @@ FlatStrip flatten_strip(const PreparedMesh& pm, const FeatureStrip& strip, const
     flat.placed.assign(n, 0);
     return flat;
   };
-  if (options.flattening != StripFlattening::conformal) {
+  const auto paper_layout = [&] {
     FlatStrip paper = unplaced();
     place_by_similar_triangles(pm, strip, paper);
     mark_valid_triangles(pm, strip, options, paper);
+    return paper;
+  };
+  std::optional<FlatStrip> paper;
+  if (options.flattening != StripFlattening::conformal) {
+    paper = paper_layout();
     // Automatic: the paper's layout is exact on developable strips and costs a fraction of a
     // sparse solve; only where it drops triangles from the snake's domain is the solve worth it.
     // On noisy meshes the holes it leaves cost accuracy early: bench_accuracy's 24k-triangle
@@ -394,20 +400,18 @@ FlatStrip flatten_strip(const PreparedMesh& pm, const FeatureStrip& strip, const
     // calls noisy (FeatureLineOptions::exact_crease_noise's default).
     constexpr double kNoisyMesh = 0.035;
     const double max_dropped_share = pm.curvature.noise >= kNoisyMesh ? 0.03 : 0.05;
-    const double dropped = double(paper.distorted_triangles + paper.flipped_triangles);
+    const double dropped = double(paper->distorted_triangles + paper->flipped_triangles);
     if (options.flattening == StripFlattening::similar_triangles ||
         dropped <= max_dropped_share * double(strip.triangles.size()))
-      return paper;
+      return std::move(*paper);
   }
   FlatStrip conformal = unplaced();
   if (place_conformally(pm, strip, conformal)) {
     mark_valid_triangles(pm, strip, options, conformal);
     return conformal;
   }
-  FlatStrip paper = unplaced();  // the solve failed: the paper's layout is still an answer
-  place_by_similar_triangles(pm, strip, paper);
-  mark_valid_triangles(pm, strip, options, paper);
-  return paper;
+  // The solve failed: the paper's layout is still an answer (laid out once).
+  return paper ? std::move(*paper) : paper_layout();
 }
 
 }  // namespace featureline

@@ -325,12 +325,19 @@ void paper_step_targets(const SnakeRun& run, const std::vector<StripPoint>& poin
 // point swinging between two states cancels out. A window whose shape change exceeds the
 // previous one's means the line is not settling (a point held by the strip's border, a force
 // kink); the step is halved then, so the snake always comes to rest.
+//
+// A window whose change is over kStalled of the last one's has stalled as well: a point swinging
+// between the strip's border and the force, moves that resampling undoes. Such a line settles
+// only as its moves are damped; waiting for a window that happens to grow took half of the
+// 250-300 iterations of snakes on weak fields.
 struct ConvergenceWindow {
   int length = 2;
   std::vector<Eigen::Vector2d> start;  ///< the line at the window's start
   double last_change = HUGE_VAL;
   double damping = 1;                  ///< share of each solved move that is taken
 };
+
+constexpr double kStalled = 0.9;
 
 // At a window's end: records the shape change per iteration and says whether it is below the
 // tolerance (the paper's "total displacement is low enough"); damps the moves when it grew.
@@ -339,7 +346,7 @@ bool window_settled(ConvergenceWindow& window, const SnakeRun& run, const std::v
   const double change = mean_distance_to(points, window.start) / run.unit / double(window.length);
   result.last_displacement = change;
   if (change < run.o.tolerance) return true;
-  if (change > window.last_change) window.damping *= 0.5;
+  if (change > kStalled * window.last_change) window.damping *= 0.5;
   window.last_change = change;
   return false;
 }
@@ -378,6 +385,22 @@ void iterate_snake(const SnakeRun& run, SnakeResult& result, const Cancellation*
   }
 }
 
+// The 90th percentile, over the strip's placed vertices, of the feature strength the force
+// follows: |C| of the line's sign in curvature-scale units (the mesh's own 90th percentile of
+// |C|), capped as the force caps it.
+double strip_feature_strength(const PreparedMesh& pm, const FeatureStrip& strip, const FlatStrip& flat, const SnakeOptions& o) {
+  std::vector<double> strength;
+  strength.reserve(strip.vertices.size());
+  for (std::size_t v = 0; v < strip.vertices.size(); ++v)
+    if (flat.placed[v])
+      strength.push_back(std::min(feature_value(pm.curvature, strip.vertices[v], o.feature_sign) / pm.curvature_scale,
+                                  o.curvature_cap));
+  if (strength.empty()) return 0;
+  const auto at = strength.begin() + std::ptrdiff_t(0.9 * double(strength.size() - 1));
+  std::nth_element(strength.begin(), at, strength.end());
+  return *at;
+}
+
 }  // namespace
 
 void check_snake_options(const SnakeOptions& o) {
@@ -386,7 +409,8 @@ void check_snake_options(const SnakeOptions& o) {
       !S::kappa_range.contains(o.kappa) || !S::exponent_range.contains(o.exponent) ||
       !S::spacing_range.contains(o.spacing) || !S::max_iterations_range.contains(o.max_iterations) ||
       !S::resample_every_range.contains(o.resample_every) || !S::max_step_range.contains(o.max_step) ||
-      !S::curvature_cap_range.contains(o.curvature_cap))
+      !S::curvature_cap_range.contains(o.curvature_cap) || !S::featureless_below_range.contains(o.featureless_below) ||
+      !S::max_iterations_range.contains(o.featureless_iterations))
     throw InvalidInputError("snake options out of range (alpha, beta, kappa >= 0; tau, exponent, max_step > 0; spacing > " +
                             format_number(S::spacing_range.min) + ")");
 }
@@ -410,7 +434,17 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
   const ForceField force = build_force_field(pm, strip, flat, o, unit);
   const double h = o.spacing * unit;
   result.points = initial_snake(strip, flat, vertex_starts(strip, flat), h);
-  const SnakeRun run{strip, flat, o, force, unit, h, 4 * result.points.size() + 16};
+  result.strip_strength = strip_feature_strength(pm, strip, flat, o);
+  SnakeOptions settle = o;
+  if (result.strip_strength < o.featureless_below) {
+    // Nothing here is more of a feature than the mesh's own surface is (on a scan, its noise):
+    // the force has no crest to lead the line to, only bumps to wander between, and on such
+    // strips the snake's line came out no stronger than the initial one after 150-270
+    // iterations. A few iterations smooth the initial line's zigzag; that is the answer.
+    result.featureless = true;
+    settle.max_iterations = std::min(o.max_iterations, o.featureless_iterations);
+  }
+  const SnakeRun run{strip, flat, settle, force, unit, h, 4 * result.points.size() + 16};
   iterate_snake(run, result, cancel);
   return result;
 }

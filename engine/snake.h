@@ -78,6 +78,12 @@ struct SnakeOptions {
   /// into bends while resampling deletes them there. false: the paper's Eq. (15) on both
   /// coordinates, explicit in the force.
   bool normal_step = true;
+  /// A strip whose 90th percentile of feature strength (|C| of the line's sign over the mesh's
+  /// 90th percentile of |C|, capped at curvature_cap) is below this has no feature to find: no
+  /// more of one than the mesh's own surface (on a scan, its noise). Its snake gets
+  /// featureless_iterations, enough to smooth the initial line. 0: every strip is searched.
+  double featureless_below = 1.0;
+  int featureless_iterations = 20;  ///< iteration cap on a featureless strip
 
   // What the snake accepts (check_snake_options); api/options_table.cpp's limits lie inside.
   static constexpr ValidRange alpha_range = at_least(0);
@@ -88,6 +94,7 @@ struct SnakeOptions {
   static constexpr ValidRange curvature_cap_range = above(0);
   static constexpr ValidRange max_step_range = above(0);
   static constexpr ValidRange max_iterations_range = at_least(0);
+  static constexpr ValidRange featureless_below_range = at_least(0);
   static constexpr ValidRange spacing_range = above(0.01);
   static constexpr ValidRange resample_every_range = at_least(1);
 };
@@ -109,6 +116,8 @@ struct SnakeResult {
   /// SnakeOptions::tolerance).
   double last_displacement = 0;
   bool converged = false;
+  double strip_strength = 0;  ///< the strip's 90th percentile of feature strength (SnakeOptions::featureless_below)
+  bool featureless = false;   ///< below featureless_below: the snake only smoothed the line
 };
 
 /// Refines the strip's line; both ends of the line stay pinned. The line's points never

@@ -227,9 +227,9 @@ const OptionSpec& spec_named(const std::vector<OptionSpec>& specs, const std::st
 }
 
 TEST(OptionTable, LimitsAreTheEnginesRanges) {
-  // 23 feature-line rows (rings, min_piece_edges, ten snake options, four crest options, seven
+  // 25 feature-line rows (rings, min_piece_edges, twelve snake options, four crest options, seven
   // trace options), 3 segmentation, 4 curvature.
-  EXPECT_EQ(expect_limits_inside_engine_ranges(feature_line_option_table()), 23u);
+  EXPECT_EQ(expect_limits_inside_engine_ranges(feature_line_option_table()), 25u);
   EXPECT_EQ(expect_limits_inside_engine_ranges(segmentation_option_table()), 3u);
   EXPECT_EQ(expect_limits_inside_engine_ranges(curvature_option_table()), 4u);
   const auto line = option_specs(feature_line_option_table());
@@ -303,7 +303,7 @@ TEST(OptionTable, EngineAcceptsWhatTheTableAcceptsAndRefusesWhatItsRangeRefuses)
   // Two ends of rings, one of each other line option but the crest's four and the trace's seven,
   // which have two (max_edges: below 2, and infinity); both ends of the three segmentation ranges;
   // radius, passes and tolerance at both ends, crease_angle above its maximum.
-  EXPECT_EQ(line.size(), 35u);
+  EXPECT_EQ(line.size(), 37u);
   EXPECT_EQ(segmentation.size(), 6u);
   EXPECT_EQ(curvature.size(), 7u);
 }

@@ -9,6 +9,7 @@
 #include "engine/errors.h"
 #include "engine/feature_line.h"
 #include "engine/mesh_io.h"
+#include "tests/support/accuracy_meshes.h"
 #include "tests/support/line_metrics.h"
 #include "tests/support/synthetic_meshes.h"
 
@@ -176,6 +177,42 @@ TEST(FeatureLine, ExtremeKappaRegressionIsBoundedInPoints) {
   const auto normal = detect_feature_line(*mesh, plain);
   EXPECT_LE(result.refined.size(), 4 * normal.refined.size() + 16 * result.pieces);
   EXPECT_EQ(result.pieces, 6u);
+}
+
+// Keys on a noisy plane: no strip holds a feature, so each piece's snake only smooths the
+// initial line, within featureless_iterations, and searching in full finds nothing stronger.
+TEST(FeatureLine, AFeaturelessStripOnlySmoothsTheLine) {
+  const auto field = make_height_field([](double, double) { return 0.0; }, 61, 0.2, 3);
+  const auto mesh = prepare_mesh(with_noise(field.mesh, 0.1, 5));
+  FeatureLineRequest request;
+  request.keys = {nearest_vertex(field.mesh, -0.7, -0.6), nearest_vertex(field.mesh, 0.0, 0.1),
+                  nearest_vertex(field.mesh, 0.7, 0.5)};
+  const auto quick = detect_feature_line(*mesh, request);
+  ASSERT_EQ(quick.piece_reports.size(), 2u);
+  for (const auto& piece : quick.piece_reports) {
+    EXPECT_TRUE(piece.featureless);
+    EXPECT_LE(piece.iterations, SnakeOptions{}.featureless_iterations);
+    EXPECT_FALSE(piece.iteration_cap);
+  }
+  request.options.snake.featureless_below = 0;
+  const auto full = detect_feature_line(*mesh, request);
+  for (const auto& piece : full.piece_reports) EXPECT_FALSE(piece.featureless);
+  EXPECT_GT(full.iterations, 2 * quick.iterations);
+  const double quick_strength = mean_feature_strength(*mesh, quick.refined, 0, SnakeOptions{}.curvature_cap);
+  const double full_strength = mean_feature_strength(*mesh, full.refined, 0, SnakeOptions{}.curvature_cap);
+  EXPECT_LT(full_strength - quick_strength, 0.1);
+  // Smoothed: the line is shorter than the initial zigzag of edges.
+  EXPECT_LT(quick.refined_length, quick.initial.length);
+}
+
+TEST(FeatureLine, AStripAlongARidgeIsSearched) {
+  const auto field = make_ridge_field(61, 0.2, 2, 0.3, 0.25, 0.3);
+  const auto mesh = prepare_mesh(with_noise(field.mesh, 0.1, 5));
+  FeatureLineRequest request;
+  request.keys = keys_on_crest(field, {-0.8, 0.0, 0.8});
+  const auto result = detect_feature_line(*mesh, request);
+  ASSERT_FALSE(result.piece_reports.empty());
+  for (const auto& piece : result.piece_reports) EXPECT_FALSE(piece.featureless);
 }
 
 TEST(FeatureLine, CancellationStopsTheWork) {
