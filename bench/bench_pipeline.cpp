@@ -5,9 +5,13 @@
 // Then the preparation's own stages (medians over --prepare-runs preparations of each mesh), so
 // a change to prepare_mesh shows where its time went.
 //
-// usage: bench_pipeline [--lines N] [--prepare-runs R] [--dump-curvature DIR] [--no-crest] [MESH ...]
+// usage: bench_pipeline [--lines N] [--keys feature|random|both] [--prepare-runs R] [--dump-curvature DIR]
+//                       [--no-crest] [MESH ...]
 //   (default meshes: the four of the README)
-//   --lines N            lines per mesh (default 40; 0: preparation only)
+//   --lines N            lines per mesh and key mode (default 40; 0: preparation only)
+//   --keys MODE          feature: 3 keys along a feature (12 and 24 rings from the first);
+//                        random: 3 keys anywhere, each 30 rings from the last (a dragged key
+//                        spends most of its time off the feature); both (default)
 //   --prepare-runs R     preparations per mesh for the breakdown (default 3)
 //   --dump-curvature DIR writes DIR/<mesh>.curvature: the field's scalars, then per vertex mean,
 //                        k_max, k_min (%.17g), then the crease flags; two dumps compared tell
@@ -81,6 +85,55 @@ void dump_curvature(const PreparedMesh& mesh, const std::string& path) {
   for (const auto c : f.crease) out << int(c) << '\n';
 }
 
+enum class KeyMode { feature, random };
+const char* to_string(KeyMode mode) { return mode == KeyMode::feature ? "feature" : "random"; }
+
+// Medians of a mesh's lines in one key mode.
+struct LineRow {
+  std::size_t lines = 0, fallbacks = 0;
+  double initial = 0, strip = 0, flatten = 0, snake = 0, median_total = 0, p90_total = 0, iterations = 0,
+         per_piece = 0;
+};
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::size_t(q * double(v.size() - 1))];
+}
+
+// `lines` lines on `mesh` with keys picked by `mode` (the same seed for every mesh and mode).
+LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, bool crest) {
+  std::mt19937_64 rng(20041101);
+  std::vector<double> initial, strip, flatten, snake, total, iterations, per_piece;
+  LineRow row;
+  for (int i = 0; i < lines; ++i) {
+    FeatureLineRequest request;
+    request.keys = mode == KeyMode::feature ? pick_feature_keys(mesh, rng) : pick_random_keys(mesh, rng);
+    request.options.crest.enabled = crest;
+    if (request.keys.empty()) break;
+    const auto r = detect_feature_line(mesh, request);
+    initial.push_back(r.timings.initial_ms);
+    strip.push_back(r.timings.strip_ms);
+    flatten.push_back(r.timings.flatten_ms);
+    snake.push_back(r.timings.snake_ms);
+    total.push_back(r.timings.total_ms);
+    iterations.push_back(r.iterations);
+    if (r.pieces > 0) per_piece.push_back(double(r.iterations) / double(r.pieces));
+    row.fallbacks += r.initial.fallbacks.size();
+  }
+  row.lines = total.size();
+  row.initial = median(initial), row.strip = median(strip), row.flatten = median(flatten), row.snake = median(snake);
+  row.median_total = median(total), row.p90_total = percentile(total, 0.9);
+  row.iterations = median(iterations), row.per_piece = median(per_piece);
+  return row;
+}
+
+void print_row(const std::string& name, KeyMode mode, const PreparedMesh& mesh, double load_ms, const LineRow& r) {
+  std::printf("%-20s %-7s %9zu %8.1f %8.1f | %5zu %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f | %6.0f %5.0f %6zu\n",
+              name.c_str(), to_string(mode), mesh.statistics.faces, load_ms, mesh.prepare_ms, r.lines, r.initial,
+              r.strip, r.flatten, r.snake, r.median_total, r.p90_total, r.iterations, r.per_piece, r.fallbacks);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -88,12 +141,19 @@ int main(int argc, char** argv) {
   bool crest = true;  // --no-crest: the snake's line, to measure what crest localisation costs
   std::string dump_dir;
   std::vector<std::string> meshes;
+  std::vector<KeyMode> modes{KeyMode::feature, KeyMode::random};
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--lines" && i + 1 < argc) lines = std::max(0, std::atoi(argv[++i]));
     else if (arg == "--prepare-runs" && i + 1 < argc) prepare_runs = std::max(1, std::atoi(argv[++i]));
     else if (arg == "--dump-curvature" && i + 1 < argc) dump_dir = argv[++i];
     else if (arg == "--no-crest") crest = false;
+    else if (arg == "--keys" && i + 1 < argc) {
+      const std::string which = argv[++i];
+      if (which == "feature") modes = {KeyMode::feature};
+      else if (which == "random") modes = {KeyMode::random};
+      else if (which != "both") return std::fprintf(stderr, "--keys: feature, random or both\n"), 2;
+    }
     else meshes.push_back(arg);
   }
   if (meshes.empty())
@@ -103,10 +163,13 @@ int main(int argc, char** argv) {
   std::printf("Paper, Table 1 (Dragon, 33,927 triangles, 1.6 GHz Pentium IV, 3 lines): initial 13 ms, "
               "parameterisation 67 ms, snake 261 ms\n\n");
   std::printf("iters: snake iterations per line, summed over its pieces; it/pc: per piece.\n\n");
-  std::printf("%-20s %9s %8s %8s | %5s %8s %8s %8s %8s %8s %8s | %6s %5s %6s\n", "mesh", "triangles", "load_ms",
+  std::printf("%-20s %-7s %9s %8s %8s | %5s %8s %8s %8s %8s %8s %8s | %6s %5s %6s\n", "mesh", "keys", "triangles", "load_ms",
               "prep_ms", "lines", "initial", "strip", "flatten", "snake", "total", "p90_tot", "iters", "it/pc", "fallbk");
-  double smallest_total = 0, largest_total = 0;
-  std::size_t smallest_faces = SIZE_MAX, largest_faces = 0;
+  struct Extreme {
+    std::size_t faces;
+    double total;
+  };
+  std::pair<Extreme, Extreme> extremes[2] = {{{SIZE_MAX, 0}, {0, 0}}, {{SIZE_MAX, 0}, {0, 0}}};
   int status = 0;
   std::vector<std::pair<std::string, PrepareBreakdown>> breakdowns;
   for (const auto& path : meshes) {
@@ -121,40 +184,24 @@ int main(int argc, char** argv) {
       add_timings(*mesh, breakdown);
       breakdowns.emplace_back(name, breakdown);
       if (!dump_dir.empty()) dump_curvature(*mesh, dump_dir + "/" + name + ".curvature");
-      std::mt19937_64 rng(20041101);
-      std::vector<double> initial, strip, flatten, snake, total, iterations, per_piece;
-      std::size_t fallbacks = 0;
-      for (int i = 0; i < lines; ++i) {
-        FeatureLineRequest request;
-        request.keys = pick_feature_keys(*mesh, rng);
-        request.options.crest.enabled = crest;
-        if (request.keys.empty()) break;
-        const auto r = detect_feature_line(*mesh, request);
-        initial.push_back(r.timings.initial_ms);
-        strip.push_back(r.timings.strip_ms);
-        flatten.push_back(r.timings.flatten_ms);
-        snake.push_back(r.timings.snake_ms);
-        total.push_back(r.timings.total_ms);
-        iterations.push_back(r.iterations);
-        if (r.pieces > 0) per_piece.push_back(double(r.iterations) / double(r.pieces));
-        fallbacks += r.initial.fallbacks.size();
+      for (const KeyMode mode : modes) {
+        const LineRow row = run_lines(*mesh, mode, lines, crest);
+        print_row(name, mode, *mesh, load_ms, row);
+        auto& [smallest, largest] = extremes[int(mode)];
+        if (mesh->statistics.faces < smallest.faces) smallest = {mesh->statistics.faces, row.median_total};
+        if (mesh->statistics.faces > largest.faces) largest = {mesh->statistics.faces, row.median_total};
       }
-      std::vector<double> sorted_total = total;
-      std::sort(sorted_total.begin(), sorted_total.end());
-      const double p90 = sorted_total.empty() ? 0 : sorted_total[std::size_t(0.9 * double(sorted_total.size() - 1))];
-      std::printf("%-20s %9zu %8.1f %8.1f | %5zu %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f | %6.0f %5.0f %6zu\n", name.c_str(),
-                  mesh->statistics.faces, load_ms, mesh->prepare_ms, total.size(), median(initial), median(strip),
-                  median(flatten), median(snake), median(total), p90, median(iterations), median(per_piece), fallbacks);
-      if (mesh->statistics.faces < smallest_faces) smallest_faces = mesh->statistics.faces, smallest_total = median(total);
-      if (mesh->statistics.faces > largest_faces) largest_faces = mesh->statistics.faces, largest_total = median(total);
     } catch (const std::exception& e) {
       std::printf("%s: %s\n", path.c_str(), e.what());
       status = 1;
     }
   }
-  if (largest_faces > smallest_faces && smallest_total > 0 && lines > 0)
-    std::printf("\nmedian total per line, largest / smallest mesh (%zu / %zu triangles): %.2fx (target: within 1.5x)\n",
-                largest_faces, smallest_faces, largest_total / smallest_total);
+  for (const KeyMode mode : modes) {
+    const auto& [smallest, largest] = extremes[int(mode)];
+    if (largest.faces > smallest.faces && smallest.total > 0 && lines > 0)
+      std::printf("\n%s keys: median total per line, largest / smallest mesh (%zu / %zu triangles): %.2fx\n",
+                  to_string(mode), largest.faces, smallest.faces, largest.total / smallest.total);
+  }
   std::printf("\nPreparation, ms (medians of %d preparations per mesh; curvature = mean + creases + noise + jet + "
               "smoothing):\n\n",
               prepare_runs);

@@ -1,5 +1,6 @@
 // Load benchmark of featureline-server on loopback: lines per second and p50/p99 latency of
-// 3-key feature lines on the 70k-triangle bunny at 1, 8 and 32 connections, and the
+// 3-key lines on the 70k-triangle bunny at 1, 8 and 32 connections (keys along features, then
+// anywhere 30 rings apart; the server's Server-Timing header splits queue wait from compute), and the
 // upload-to-ready time of igea (270k triangles). The server runs in this process on its own
 // threads (as it would beside a load generator on the same 2-core machine); every client
 // thread keeps one keep-alive connection.
@@ -99,12 +100,18 @@ int main(int argc, char** argv) {
     if (!res || res->status != 201) throw std::runtime_error("bunny upload failed");
     const std::string id = nlohmann::json::parse(res->body)["mesh_id"];
     const auto mesh = featureline::prepare_mesh(featureline::read_mesh(bunny, featureline::MeshFormat::off));
-    const std::vector<std::string> bodies = featureline::bench::feature_line_bodies(*mesh, 64, 7);
-    std::printf("3-key lines on bunny_closed.off (69,666 triangles), %zu engine threads, %.0f s per level:\n",
-                engine_threads, seconds);
-    featureline::bench::print_load_header();
-    const featureline::bench::LoadTarget target{"127.0.0.1", port, {"/v1/meshes/" + id + "/feature-lines"}, bodies};
-    for (int connections : {1, 8, 32}) featureline::bench::print_load_level(featureline::bench::run_load(target, connections, seconds));
+    const std::vector<std::string> along = featureline::bench::feature_line_bodies(*mesh, 64, 7),
+                                   anywhere = featureline::bench::random_line_bodies(*mesh, 64, 7);
+    for (const auto& [name, bodies] : {std::pair{"along features", &along}, std::pair{"anywhere, 30 rings apart", &anywhere}}) {
+      std::printf("3-key lines on bunny_closed.off (69,666 triangles), keys %s, %zu engine threads, %.0f s per level "
+                  "(queue: wait for an engine thread; engine: the line's own time; both from Server-Timing):\n",
+                  name, engine_threads, seconds);
+      featureline::bench::print_load_header();
+      const featureline::bench::LoadTarget target{"127.0.0.1", port, {"/v1/meshes/" + id + "/feature-lines"}, *bodies};
+      for (int connections : {1, 8, 32})
+        featureline::bench::print_load_level(featureline::bench::run_load(target, connections, seconds));
+      std::printf("\n");
+    }
     server.stop();
     serving.join();
   } catch (const std::exception& e) {

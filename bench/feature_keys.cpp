@@ -53,5 +53,25 @@ std::vector<std::uint32_t> pick_feature_keys(const PreparedMesh& mesh, std::mt19
   return {};
 }
 
+// Three keys anywhere: a random vertex, a random vertex `spacing` rings from it, and a random
+// vertex `spacing` rings from that one and farther from the first than `spacing` edges would be
+// on a straight line's half (so the line does not fold back onto itself).
+std::vector<std::uint32_t> pick_random_keys(const PreparedMesh& mesh, std::mt19937_64& rng, int spacing) {
+  for (int attempt = 0; attempt < 1000; ++attempt) {
+    const auto v0 = std::uint32_t(rng() % mesh.n_vertices());
+    if (mesh.component[v0] < 0) continue;
+    const auto ring1 = ring_at(mesh, v0, spacing);
+    if (ring1.empty()) continue;
+    const auto v1 = ring1[rng() % ring1.size()];
+    auto ring2 = ring_at(mesh, v1, spacing);
+    const double reach = (mesh.positions[v1] - mesh.positions[v0]).norm();
+    ring2.erase(std::remove_if(ring2.begin(), ring2.end(),
+                               [&](std::uint32_t v) { return (mesh.positions[v] - mesh.positions[v0]).norm() < reach; }),
+                ring2.end());
+    if (ring2.empty()) continue;
+    return {v0, v1, ring2[rng() % ring2.size()]};
+  }
+  return {};
+}
 
 }  // namespace featureline

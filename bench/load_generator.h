@@ -23,6 +23,9 @@ struct LoadLevel {
   int connections = 0;
   double lines_per_s = 0, p50_ms = 0, p99_ms = 0, max_ms = 0;
   std::size_t errors = 0;  ///< answers other than 200 and failed connections
+  /// From the answers' Server-Timing header (0 when the server sends none): the wait for an
+  /// engine thread and the engine's time per request.
+  double queue_p50_ms = 0, queue_p99_ms = 0, engine_p50_ms = 0, engine_p99_ms = 0;
 };
 
 /// Runs `connections` clients for `seconds` after each sent one warm-up request (connection
@@ -35,10 +38,14 @@ double percentile(std::vector<double> values, double q);
 /// (bench/feature_keys.h), from a seeded generator: the same set for every run and level.
 std::vector<std::string> feature_line_bodies(const PreparedMesh& mesh, std::size_t count, std::uint64_t seed);
 
+/// The same with 3 keys anywhere, each 30 rings from the last (bench/feature_keys.h).
+std::vector<std::string> random_line_bodies(const PreparedMesh& mesh, std::size_t count, std::uint64_t seed);
+
 /// A benchmark input file's bytes. \throw std::runtime_error naming the missing file
 std::string read_file(const std::string& path);
 
-/// One table row, and its header: connections, lines/s, p50_ms, p99_ms, max_ms, errors.
+/// One table row, and its header: connections, lines/s, p50_ms, p99_ms, max_ms, errors, then the
+/// server's queue wait and engine time (p50, p99).
 void print_load_header(const char* first_column = "connections");
 void print_load_level(const LoadLevel& level, const std::string& label = "");
 

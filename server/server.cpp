@@ -748,8 +748,15 @@ struct FeaturelineServer::Impl {
   // The batch shares one Cancellation with the request's deadline: work stops when the deadline
   // passes, and when the batch is refused or a line fails, its other lines stop too instead of
   // holding workers for an answer nobody will read.
+  // Where a batch's time went: waiting for an engine thread (the longest wait of its lines) and
+  // computing (the lines' engine time, summed). Answered as a Server-Timing header, so a client
+  // tells a busy server from an expensive request.
+  struct BatchTiming {
+    double queue_ms = 0, engine_ms = 0;
+  };
+
   std::vector<FeatureLineResult> run_lines(const std::shared_ptr<const MeshSession>& session,
-                                           const std::vector<FeatureLineRequest>& lines) {
+                                           const std::vector<FeatureLineRequest>& lines, BatchTiming* timing = nullptr) {
     const auto deadline = request_deadline();
     const auto cancel = std::make_shared<Cancellation>(deadline);
     struct CancelUnlessDone {
@@ -759,10 +766,14 @@ struct FeaturelineServer::Impl {
         if (!done) cancel->cancel();
       }
     } guard{cancel};
-    std::vector<std::future<FeatureLineResult>> futures;
+    using Timed = std::pair<FeatureLineResult, double>;  // the line, and its wait for a thread in ms
+    std::vector<std::future<Timed>> futures;
     for (auto line : lines) {
       line.cancel = cancel.get();
-      auto future = pool.try_submit([session, line, cancel] { return detect_feature_line(*session->mesh, line); });
+      auto future = pool.try_submit([session, line, cancel, queued = Clock::now()] {
+        const double waited = std::chrono::duration<double, std::milli>(Clock::now() - queued).count();
+        return Timed{detect_feature_line(*session->mesh, line), waited};
+      });
       if (!future) {
         metrics.record_rejected("queue_full");
         throw HttpError(503, "overloaded", "the server is busy; retry shortly", {{"Retry-After", "1"}});
@@ -775,7 +786,12 @@ struct FeaturelineServer::Impl {
         metrics.record_rejected("deadline");
         throw HttpError(503, "deadline_exceeded", "the request took longer than the server's deadline", {{"Retry-After", "5"}});
       }
-      results.push_back(f.get());
+      auto [result, waited] = f.get();
+      if (timing != nullptr) {
+        timing->queue_ms = std::max(timing->queue_ms, waited);
+        timing->engine_ms += result.timings.total_ms;
+      }
+      results.push_back(std::move(result));
     }
     guard.done = true;
     return results;
@@ -890,7 +906,11 @@ struct FeaturelineServer::Impl {
     const std::vector<FeatureLineRequest> lines = parse_feature_line_body(json_body(req, request_body), *session->mesh, batch);
     request_body.text = std::string();  // the keys are all a line needs from here on
     request_body.held.hold(0);
-    const std::vector<FeatureLineResult> results = run_lines(session, lines);
+    BatchTiming timing;
+    const std::vector<FeatureLineResult> results = run_lines(session, lines, &timing);
+    char server_timing[96];
+    std::snprintf(server_timing, sizeof server_timing, "queue;dur=%.3f, engine;dur=%.3f", timing.queue_ms, timing.engine_ms);
+    res.set_header("Server-Timing", server_timing);
     if (answer == ExportFormat::glb) {
       res.set_content(feature_line_to_glb(*session->mesh, results, false), "model/gltf-binary");
     } else if (answer == ExportFormat::gltf) {

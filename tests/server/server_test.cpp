@@ -3,6 +3,8 @@
 // (exact error and status), GET /v1/options, segmentation options and a deadline.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 // Eigen (through the engine headers) must come before httplib.h (its <resolv.h> defines `_res`).
 #include "api/feature_line_json.h"
 #include "api/requests.h"
@@ -73,6 +75,13 @@ TEST(InProcessServer, AnswersALineAsTheEngineComputesIt) {
   EXPECT_EQ(answer["keys"], json({701, 963, 1184}));
   EXPECT_EQ(answer["initial"]["vertices"], json(expected.initial.vertices));
   EXPECT_EQ(answer["refined"]["points"].size(), expected.refined.size());
+  // Where the time went: the wait for an engine thread and the engine's own time, as the
+  // answer's timings report it.
+  double queue = -1, engine = -1;
+  ASSERT_EQ(std::sscanf(r->get_header_value("Server-Timing").c_str(), "queue;dur=%lf, engine;dur=%lf", &queue, &engine), 2)
+      << r->get_header_value("Server-Timing");
+  EXPECT_GE(queue, 0);
+  EXPECT_NEAR(engine, answer["stats"]["timings_ms"]["total"].get<double>(), 1e-3);
 }
 
 TEST(InProcessServer, ABadOptionIs400WithTheExactMessage) {
