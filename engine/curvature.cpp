@@ -7,9 +7,9 @@
 #include <array>
 #include <atomic>
 #include <cmath>
-#include <thread>
 
 #include "engine/errors.h"
+#include "engine/executor.h"
 #include "engine/internal/geometry.h"
 #include "engine/internal/stopwatch.h"
 
@@ -23,28 +23,10 @@ double median_of(std::vector<double> values) {
   return *mid;
 }
 
-std::size_t worker_count() { return std::clamp<std::size_t>(std::thread::hardware_concurrency(), 1, 8); }
-
-// Runs body(begin, end, worker) over blocks of [0, n) on worker_count() threads (the fits are
-// independent per vertex and dominate preparation time on large meshes). Each thread takes the
-// next block when it finishes one, so uneven work (denser neighbourhoods, creases) leaves no
-// thread idle: equal halves of igea's fits took 198 and 226 ms. `worker` (< worker_count())
-// tells the body which thread's scratch space to use.
-template <typename Body>
-void parallel_ranges(std::size_t n, Body body) {
-  constexpr std::size_t kBlock = 1024;
-  const std::size_t threads = worker_count();
-  if (threads == 1 || n < 4 * kBlock) return body(std::size_t(0), n, std::size_t(0));
-  std::atomic<std::size_t> next{0};
-  const auto work = [&](std::size_t worker) {
-    for (std::size_t begin = next.fetch_add(kBlock); begin < n; begin = next.fetch_add(kBlock))
-      body(begin, std::min(n, begin + kBlock), worker);
-  };
-  std::vector<std::thread> pool;
-  for (std::size_t t = 1; t < threads; ++t) pool.emplace_back(work, t);
-  work(0);
-  for (auto& thread : pool) thread.join();
-}
+// Vertices and faces per block of a parallel loop: a few hundred microseconds of fits, so the
+// next-block handout stays cheap while uneven work (denser neighbourhoods, creases) still
+// spreads over the participants (equal halves of igea's fits took 198 and 226 ms).
+constexpr std::size_t kBlock = 1024;
 
 struct JetFit {
   double k_max = 0, k_min = 0;
@@ -87,15 +69,15 @@ void gather(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, con
 // scaled by the radius for conditioning. The principal curvatures are the eigenvalues of the
 // graph's shape operator I^-1 II at the origin, so a tilted frame is corrected by c1, c2.
 JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N, std::uint32_t v,
-               const std::vector<std::uint32_t>& hood, double radius) {
+               const std::vector<std::uint32_t>& hood, double radius, std::vector<double>& weights) {
   JetFit fit;
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
   const double inv_r = 1.0 / radius;
   // Gaussian weights, sigma = radius / 2. A compact (1 - d^2/r^2)^2 kernel was 25% faster, but
   // its smaller effective neighbourhood put the refined line on noisy ridges of 24k-245k
   // triangles 30-85% further from the crest (bench_accuracy; slightly closer on 5k).
-  // One exponential per point (the frame and the fit use the same weights).
-  thread_local std::vector<double> weights;
+  // One exponential per point (the frame and the fit use the same weights; `weights` is the
+  // caller's scratch).
   weights.resize(hood.size());
   for (std::size_t i = 0; i < hood.size(); ++i) {
     weights[i] = std::exp(-2 * (P[hood[i]] - P[v]).squaredNorm() * inv_r * inv_r);
@@ -160,22 +142,24 @@ std::vector<double> local_edge_lengths(const AdjacencyView& adj) {
 std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
                             const AdjacencyView& adj, const std::vector<char>& on_crease,
                             const std::vector<double>& local, double radius, std::size_t stride,
-                            const std::vector<double>& fallback, CurvatureField& field, const Cancellation* cancel) {
+                            const std::vector<double>& fallback, CurvatureField& field, const Cancellation* cancel,
+                            Executor& executor) {
   const std::size_t n = P.size();
   std::vector<double> residual(n, -1.0);
   struct Scratch {
     std::vector<std::uint32_t> stamp, hood;
+    std::vector<double> weights;
     std::uint32_t generation = 0;
   };
-  // Allocated (and freed) by this thread, so the largest buffers of the fits come from and go
-  // back to one malloc arena instead of the workers' (README, Benchmarks: resident memory).
-  std::vector<Scratch> scratch(worker_count());
-  for (auto& s : scratch) s.stamp.assign(n, 0);
-  parallel_ranges(n, [&](std::size_t begin, std::size_t end, std::size_t worker) {
-    auto& [stamp, hood, generation] = scratch[worker];
+  // One slot per participant, freed when the fits are done. A slot's vertex stamps are made by
+  // the participant on its first block, so only the threads that actually took part hold a
+  // mesh-sized array (a few of a large pool when others are busy).
+  std::vector<Scratch> scratch(executor.workers());
+  executor.parallel_for(n, kBlock, [&](std::size_t begin, std::size_t end, std::size_t worker) {
+    auto& [stamp, hood, weights, generation] = scratch[worker];
+    if (stamp.empty()) stamp.assign(n, 0);
     for (std::size_t v = begin; v < end; ++v) {
-      // Worker threads must not throw: they stop, and the caller throws below.
-      if ((v & 4095) == 0 && cancel != nullptr && cancel->requested()) break;
+      if ((v & 4095) == 0) throw_if_cancelled(cancel);
       if (v % stride != 0) continue;
       field.k_max[v] = field.k_min[v] = fallback[v];
       if (!(local[v] > 0)) continue;
@@ -184,7 +168,7 @@ std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::ve
       // Too few points (coarse or skinny neighbourhoods) widen the radius a few times.
       for (int attempt = 0; attempt < 4 && !fit.ok; ++attempt, r *= 1.5) {
         gather(P, adj, on_crease, std::uint32_t(v), r, stamp, ++generation, hood);
-        if (hood.size() >= 8) fit = fit_jet(P, N, std::uint32_t(v), hood, r);
+        if (hood.size() >= 8) fit = fit_jet(P, N, std::uint32_t(v), hood, r, weights);
       }
       if (!fit.ok) continue;
       field.k_max[v] = fit.k_max;
@@ -213,7 +197,7 @@ std::uint32_t entry_of(const AdjacencyView& adj, std::uint32_t v, std::uint32_t 
 // Entry v -> w is visited once, from the face that runs through the edge from v to w (its far
 // corner is a), with b the far corner of the face across. Both directions of an edge are
 // measured from their own side, as every later test reads them.
-EdgeAngles dihedral_angles(const MeshTablesView& mesh) {
+EdgeAngles dihedral_angles(const MeshTablesView& mesh, Executor& executor) {
   const auto& P = mesh.positions;
   const AdjacencyView& adj = mesh.adjacency;
   EdgeAngles out;
@@ -223,7 +207,7 @@ EdgeAngles dihedral_angles(const MeshTablesView& mesh) {
   // In parallel over faces. An edge's angle is measured once, by the lower-numbered of its two
   // faces, which writes both directions' entries (the prepared mesh is manifold: OpenMesh took
   // every face, non-manifold ones on copied vertices, so no entry is written twice).
-  parallel_ranges(mesh.triangles.size(), [&](std::size_t begin, std::size_t end, std::size_t) {
+  executor.parallel_for(mesh.triangles.size(), kBlock, [&](std::size_t begin, std::size_t end, std::size_t) {
     for (std::size_t f = begin; f < end; ++f) {
       const auto& t = mesh.triangles[f];
       for (int side = 0; side < 3; ++side) {
@@ -339,8 +323,8 @@ void finish_smoothing(const SmoothedField& s, CurvatureField& field) {
 }
 
 // One pass of the umbrella average, half weight on the vertex itself.
-void smooth_once(SmoothedField& s) {
-  parallel_ranges(s.values.size(), [&](std::size_t first, std::size_t last, std::size_t) {
+void smooth_once(SmoothedField& s, Executor& executor) {
+  executor.parallel_for(s.values.size(), kBlock, [&](std::size_t first, std::size_t last, std::size_t) {
     for (std::size_t v = first; v < last; ++v) {
       const auto begin = s.offsets[v], end = s.offsets[v + 1];
       if (begin == end) {
@@ -390,7 +374,8 @@ double relative_roughness(const SmoothedField& s) {
 // how finely the mesh samples its features: on a 245k-triangle ridge at 10-20% noise about
 // 64-100 passes (the line's error 0.07-0.10 edge lengths instead of 0.36-0.88 unsmoothed), on a
 // 5k-triangle one or a clean mesh 0-2 (bench_accuracy).
-int smooth_until_noise_is_gone(SmoothedField& s, double tolerance, int max_passes, const Cancellation* cancel) {
+int smooth_until_noise_is_gone(SmoothedField& s, double tolerance, int max_passes, const Cancellation* cancel,
+                               Executor& executor) {
   int passes = 0;
   double roughness = relative_roughness(s);
   std::vector<std::array<double, 2>> before;
@@ -398,7 +383,7 @@ int smooth_until_noise_is_gone(SmoothedField& s, double tolerance, int max_passe
     throw_if_cancelled(cancel);
     const int run = std::min(std::max(passes, 1), max_passes - passes);
     before = s.values;
-    for (int pass = 0; pass < run; ++pass) smooth_once(s);
+    for (int pass = 0; pass < run; ++pass) smooth_once(s, executor);
     const double smoothed = relative_roughness(s);
     if (smoothed > tolerance * roughness) {
       s.values.swap(before);  // this run only blurred: keep the field as it was before it
@@ -447,8 +432,10 @@ void check_curvature_options(const CurvatureOptions& options) {
 }
 
 CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::vector<Eigen::Vector3d>& normals,
-                                       const CurvatureOptions& options, const Cancellation* cancel) {
+                                       const CurvatureOptions& options, const Cancellation* cancel,
+                                       Executor* executor_or_null) {
   check_curvature_options(options);
+  Executor& executor = executor_or_default(executor_or_null);
   CurvatureField field;
   const auto& positions = mesh.positions;
   const AdjacencyView& adjacency = mesh.adjacency;
@@ -461,7 +448,7 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
   const std::vector<double> local = local_edge_lengths(adjacency);
   // Creases: above 30 degrees, and well above the dihedral angles the noise makes on its own.
   if (options.crease_angle >= 0) {
-    const EdgeAngles angles = dihedral_angles(mesh);
+    const EdgeAngles angles = dihedral_angles(mesh, executor);
     std::vector<double> interior;  // one angle per interior edge
     interior.reserve(angles.angle.size() / 2);
     for (std::uint32_t v = 0; v < n; ++v)
@@ -487,7 +474,7 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
     constexpr double kProbeRadius = 2;
     const std::size_t stride = std::max<std::size_t>(1, n / 20000);
     std::vector<double> residual =
-        fit_all(positions, normals, adjacency, on_crease, local, kProbeRadius, stride, field.mean, field, cancel);
+        fit_all(positions, normals, adjacency, on_crease, local, kProbeRadius, stride, field.mean, field, cancel, executor);
     residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return r < 0; }), residual.end());
     field.noise = median_of(residual);
     field.timings.noise_ms = lap_ms(clock);
@@ -495,17 +482,17 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
     // radius^-6 at a fixed density) but blur features; grow the radius with the noise only.
     field.radius = options.radius > 0 ? options.radius : std::clamp(2 + 100 * field.noise, kProbeRadius, 6.0);
     if (field.radius != kProbeRadius || stride != 1)
-      fit_all(positions, normals, adjacency, on_crease, local, field.radius, 1, field.mean, field, cancel);
+      fit_all(positions, normals, adjacency, on_crease, local, field.radius, 1, field.mean, field, cancel, executor);
     field.timings.jet_ms = lap_ms(clock);
   }
   SmoothedField smoothed = start_smoothing(field, adjacency);
   if (options.smoothing_passes < 0) {
     field.smoothing_passes = smooth_until_noise_is_gone(smoothed, options.smoothing_tolerance,
-                                                        blur_limited_passes(positions, local), cancel);
+                                                        blur_limited_passes(positions, local), cancel, executor);
   } else {
     for (int pass = 0; pass < options.smoothing_passes; ++pass) {
       throw_if_cancelled(cancel);
-      smooth_once(smoothed);
+      smooth_once(smoothed, executor);
     }
     field.smoothing_passes = options.smoothing_passes;
   }

@@ -21,6 +21,7 @@
 
 #include "engine/cancellation.h"
 #include "engine/enum_names.h"
+#include "engine/executor.h"
 #include "engine/valid_range.h"
 
 namespace featureline {
@@ -113,10 +114,13 @@ struct MeshTablesView {
   AdjacencyView adjacency;
 };
 
+/// The dihedral angles, the fits and the smoothing passes are split over `executor` (nullptr:
+/// default_executor()); the field is the same whatever it is.
 /// \throw InvalidInputError for options out of range; CancelledError once `cancel` is requested
 ///        (checked every 4096 vertices of the fits and every smoothing pass).
 CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::vector<Eigen::Vector3d>& normals,
-                                       const CurvatureOptions& options = {}, const Cancellation* cancel = nullptr);
+                                       const CurvatureOptions& options = {}, const Cancellation* cancel = nullptr,
+                                       Executor* executor = nullptr);
 
 /// The signed mean curvature of every vertex by the cotangent formula (exposed for tests).
 std::vector<double> compute_mean_curvature(const MeshTablesView& mesh, const std::vector<Eigen::Vector3d>& normals);

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <future>
 #include <numeric>
 #include <sstream>
 #include <unordered_map>
@@ -13,6 +12,7 @@
 #include <mutex>
 
 #include "engine/errors.h"
+#include "engine/executor.h"
 #include "engine/internal/geometry.h"
 #include "engine/internal/stopwatch.h"
 
@@ -413,13 +413,13 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   pm.warnings = std::move(raw.warnings);
   stats.file_vertices = raw.positions.size();
   stats.file_faces = raw.source_faces;
+  Executor& executor = executor_or_default(options.executor);
   {
     // The non-manifold counts read only the soup, so they are made beside OpenMesh's insertion
-    // (serial, the largest part of this stage); the future is joined even when insertion throws.
+    // (serial, the largest part of this stage).
     MeshStatistics counted;
-    auto counting = std::async(std::launch::async, [&raw, &counted] { count_non_manifold(raw, counted); });
-    add_triangles(raw, pm, options.max_memory_bytes, cancel);
-    counting.get();
+    executor.run_beside([&raw, &counted] { count_non_manifold(raw, counted); },
+                        [&] { add_triangles(raw, pm, options.max_memory_bytes, cancel); });
     stats.non_manifold_edges = counted.non_manifold_edges;
     stats.non_manifold_vertices = counted.non_manifold_vertices;
   }
@@ -434,33 +434,36 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   pm.timings.triangles_ms = lap_ms(clock);
   // Beside the vertex adjacency (OpenMesh circulators, serial): the face tables, which read
   // only the triangle list. Each writes its own members of pm.
-  auto face_tables = std::async(std::launch::async, [&pm] {
-    auto own_clock = StageClock::now();
-    build_face_tables(pm);
-    pm.timings.tables_ms = lap_ms(own_clock);
-  });
-  build_vertex_adjacency(pm);
-  label_components(pm);
-  measure_boundary_and_box(pm);
-  pm.timings.adjacency_ms = lap_ms(clock);
-  face_tables.get();
+  executor.run_beside(
+      [&pm] {
+        auto own_clock = StageClock::now();
+        build_face_tables(pm);
+        pm.timings.tables_ms = lap_ms(own_clock);
+      },
+      [&] {
+        build_vertex_adjacency(pm);
+        label_components(pm);
+        measure_boundary_and_box(pm);
+        pm.timings.adjacency_ms = lap_ms(clock);
+      });
   orient_closed_components(pm, options.orient_outward);
+  lap_ms(clock);  // the wait for the face tables, if any, is theirs
   // Beside the normals and the curvature field (whose creases and mean curvature are serial):
   // the k-d tree, which reads only the positions and components.
-  auto index = std::async(std::launch::async, [&pm] {
-    auto own_clock = StageClock::now();
-    pm.vertex_index = VertexIndex(pm.positions, pm.component);
-    pm.timings.index_ms = lap_ms(own_clock);
-  });
-  lap_ms(clock);  // the wait for the face tables, if any, is theirs
-
-  throw_if_cancelled(cancel);
-  pm.vertex_normals = compute_vertex_normals(pm.positions, pm.triangles);
-  pm.timings.normals_ms = lap_ms(clock);
-  const MeshTablesView tables{pm.positions, pm.triangles, pm.face_neighbors, pm.boundary_vertex, {pm.neighbor_offsets, pm.neighbors, pm.neighbor_edge_lengths}};
-  pm.curvature = compute_curvature_field(tables, pm.vertex_normals, options.curvature, cancel);
-  pm.timings.curvature_ms = lap_ms(clock);
-  index.get();
+  executor.run_beside(
+      [&pm] {
+        auto own_clock = StageClock::now();
+        pm.vertex_index = VertexIndex(pm.positions, pm.component);
+        pm.timings.index_ms = lap_ms(own_clock);
+      },
+      [&] {
+        throw_if_cancelled(cancel);
+        pm.vertex_normals = compute_vertex_normals(pm.positions, pm.triangles);
+        pm.timings.normals_ms = lap_ms(clock);
+        const MeshTablesView tables{pm.positions, pm.triangles, pm.face_neighbors, pm.boundary_vertex, {pm.neighbor_offsets, pm.neighbors, pm.neighbor_edge_lengths}};
+        pm.curvature = compute_curvature_field(tables, pm.vertex_normals, options.curvature, cancel, &executor);
+        pm.timings.curvature_ms = lap_ms(clock);
+      });
   stats.curvature_method = to_string(options.curvature.method);
   stats.noise = pm.curvature.noise;
   stats.curvature_radius = pm.curvature.radius;

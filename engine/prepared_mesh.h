@@ -29,6 +29,10 @@ struct PrepareOptions {
   /// reversed winding) reads convex edges as valleys; true turns its faces outward (their
   /// second and third corners swapped), false keeps them and warns.
   bool orient_outward = true;
+  /// Where the parallel parts run (the curvature's loops, and the tables, counts and k-d tree
+  /// built beside other stages); nullptr: default_executor(). The server passes its engine pool.
+  /// The prepared mesh is the same whatever it is.
+  Executor* executor = nullptr;
 };
 
 /// Counts and measures of a prepared mesh, as `featureline info` and the server report them.
@@ -67,7 +71,8 @@ struct MeshStatistics {
 /// Wall time of each stage of prepare_mesh, milliseconds (bench_pipeline prints them; the
 /// curvature stage's own parts are in PreparedMesh::curvature.timings). The face tables are
 /// built beside the adjacency and the k-d tree beside the normals and curvature, each timed on
-/// its own thread, so all six can add up to more than the whole; the other four cannot.
+/// whichever thread ran it (another of the executor's when one was idle), so all six can add up
+/// to more than the whole; the other four cannot.
 struct PrepareTimings {
   double triangles_ms = 0;  ///< non-manifold counts, the OpenMesh mesh and the triangle list
   double adjacency_ms = 0;  ///< vertex adjacency, components, boundary loops, bounding box

@@ -158,9 +158,10 @@ std::string utc_time(std::int64_t unix_s) {
   return stamp;
 }
 
-// Reads and prepares an upload: engine work, run on the pool (uploads and rebuilds alike).
+// Reads and prepares an upload: engine work, run on the pool (uploads and rebuilds alike), whose
+// idle threads the preparation's parallel parts use (`executor`: the pool).
 MeshSession prepare_session(std::string_view bytes, MeshFormat format, const ReadMeshOptions& limits,
-                            const Cancellation* cancel) {
+                            const Cancellation* cancel, Executor& executor) {
   const auto t0 = Clock::now();
   RawMesh raw = read_mesh(bytes, format, limits);
   MeshSession s;
@@ -168,6 +169,7 @@ MeshSession prepare_session(std::string_view bytes, MeshFormat format, const Rea
   s.format = format;
   PrepareOptions options;
   options.max_memory_bytes = limits.memory_budget_bytes;  // nothing is prepared that the cache could never keep
+  options.executor = &executor;
   s.mesh = prepare_mesh(std::move(raw), options, cancel);
   s.bytes = s.mesh->memory_bytes();
   return s;
@@ -390,8 +392,8 @@ struct FeaturelineServer::Impl {
 
   // Prepares a stored upload again after a cache miss (eviction, restart, another replica's id).
   MeshSession rebuild(std::shared_ptr<const StoredUpload> upload) {
-    return run_on_pool([upload, limits = read_limits](const Cancellation* cancel) {
-      return prepare_session(upload->bytes, upload->format, limits, cancel);
+    return run_on_pool([this, upload, limits = read_limits](const Cancellation* cancel) {
+      return prepare_session(upload->bytes, upload->format, limits, cancel, pool);
     });
   }
 
@@ -710,9 +712,9 @@ struct FeaturelineServer::Impl {
     upload->format = *format;
     upload->uploaded_at_unix_s = std::int64_t(std::time(nullptr));
 
-    MeshSession session = run_on_pool([upload = std::shared_ptr<const StoredUpload>(upload), limits = read_limits](
+    MeshSession session = run_on_pool([this, upload = std::shared_ptr<const StoredUpload>(upload), limits = read_limits](
                                           const Cancellation* cancel) {
-      return prepare_session(upload->bytes, upload->format, limits, cancel);
+      return prepare_session(upload->bytes, upload->format, limits, cancel, pool);
     });
     const std::size_t needed = session.bytes;
     auto stored = sessions.create(std::move(session), *upload);  // a full or unreachable store: 503, nothing kept
@@ -975,7 +977,7 @@ std::string FeaturelineServer::preload(const std::string& path) {
   upload.bytes = std::move(file.bytes);
   upload.format = file.format;
   upload.uploaded_at_unix_s = std::int64_t(std::time(nullptr));
-  MeshSession s = prepare_session(upload.bytes, upload.format, impl_->read_limits, nullptr);
+  MeshSession s = prepare_session(upload.bytes, upload.format, impl_->read_limits, nullptr, impl_->pool);
   s.pinned = true;  // the bundled sample stays available however long the server runs
   auto stored = impl_->sessions.create(std::move(s), upload);
   if (!stored) throw std::runtime_error(path + " is larger than the whole cache budget");
