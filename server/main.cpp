@@ -3,6 +3,7 @@
 #include <signal.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <string>
 #include <thread>
@@ -11,9 +12,12 @@
 
 #include "featureline_version.h"
 #include "server/server.h"
+#include "server/upload_store.h"
 
 namespace {
 
+using featureline::server::kRedisPasswordVariable;
+using featureline::server::redacted_store_url;
 using featureline::server::ServerOptions;
 
 // Every flag, with its range and default from ServerOptions.
@@ -60,8 +64,9 @@ void add_flags(CLI::App& app, ServerOptions& o, std::string& port_file) {
          "Keep every upload in DIR (atomic writes), so sessions survive eviction and restarts")
       ->type_name("DIR");
   app.add_option("--store", o.store,
-                 "Where uploads are kept: redis://HOST:PORT[/DB] (shared by a cluster's replicas) or dir:PATH; "
-                 "default: memory only");
+                 "Where uploads are kept: redis://[[USER][:PASSWORD]@]HOST:PORT[/DB] (shared by a cluster's replicas; "
+                 "the password may instead come from the environment variable " + std::string(kRedisPasswordVariable) +
+                 ", which ps does not show) or dir:PATH; default: memory only");
   app.add_option("--store-max-mb", o.store_max_mb, "A directory store holds at most this many MiB of uploads; beyond, 503")
       ->check(count(1 << 24));
   app.add_option("--port-file", port_file, "Write the bound port to this file once listening (for scripts)");
@@ -77,7 +82,7 @@ void print_banner(const ServerOptions& options, int port, const std::vector<std:
   }
   if (!options.web_root.empty() || options.embedded_page) std::printf("open %s/\n", base.c_str());
   std::printf("uploads kept %s\n", options.store.empty() ? "in memory only (a restart forgets them; see --data-dir)"
-                                                          : ("in " + options.store).c_str());
+                                                          : ("in " + redacted_store_url(options.store)).c_str());
   std::fflush(stdout);
 }
 
@@ -91,6 +96,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("featureline-server ") + FEATURELINE_VERSION);
   app.footer("API: api/openapi.yaml (GET /v1/options lists every request option). Docs: docs/server.md");
   add_flags(app, options, port_file);
+  // The Redis password from the environment keeps it off the command line, which ps shows.
+  if (const char* password = std::getenv(kRedisPasswordVariable)) options.store_password = password;
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

@@ -144,7 +144,7 @@ std::unique_ptr<UploadStore> open_store(const ServerOptions& o, StoreBreaker*& b
   StoreOptions store_options;
   store_options.idle_ttl = std::chrono::seconds(o.ttl_s) + store_touch_interval(o);
   store_options.max_bytes = o.store_max_mb << 20;
-  auto guarded = std::make_unique<StoreBreaker>(open_upload_store(o.store, store_options), BreakerOptions{});
+  auto guarded = std::make_unique<StoreBreaker>(open_upload_store(o.store, store_options, o.store_password), BreakerOptions{});
   breaker = guarded.get();
   return guarded;
 }

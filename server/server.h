@@ -34,8 +34,10 @@ struct ServerOptions {
   std::string web_root;                   ///< folder served at / instead of the page built into the binary
   bool embedded_page = true;              ///< serve the built-in page at / when web_root is empty
   /// Where uploads are kept so sessions survive eviction and restarts (server/upload_store.h):
-  /// a folder ("dir:PATH" or PATH), "redis://HOST:PORT[/DB]", or empty for memory only.
+  /// a folder ("dir:PATH" or PATH), "redis://[[USER][:PASSWORD]@]HOST:PORT[/DB]", or empty for
+  /// memory only. Never printed as is: redacted_store_url.
   std::string store;
+  std::string store_password;             ///< Redis' password when the URL has none (main: kRedisPasswordVariable)
   std::size_t store_max_mb = 0;           ///< directory store: total upload bytes kept (0: no limit)
 };
 

@@ -310,27 +310,92 @@ std::unique_ptr<UploadStore> open_directory_store(const std::string& path, Store
   return std::make_unique<DirectoryStore>(path, std::move(options));
 }
 
-std::unique_ptr<UploadStore> open_upload_store(const std::string& url, StoreOptions options) {
-  const std::string redis = "redis://";
-  if (url.rfind(redis, 0) != 0) return open_directory_store(url.rfind("dir:", 0) == 0 ? url.substr(4) : url, std::move(options));
-  RedisAddress address;
-  std::string rest = url.substr(redis.size());
+namespace {
+
+const std::string kRedisScheme = "redis://";
+
+int hex_digit(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+// %XX sequences to their bytes; `what` names the part in the error (never its text: a password).
+std::string percent_decoded(const std::string& text, const std::string& what, const std::string& shown_url) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] != '%') {
+      out += text[i];
+      continue;
+    }
+    const int high = i + 2 < text.size() ? hex_digit(text[i + 1]) : -1;
+    const int low = high < 0 ? -1 : hex_digit(text[i + 2]);
+    if (low < 0)
+      throw std::invalid_argument("the " + what + " in the Redis URL " + shown_url +
+                                  " has a % not followed by two hex digits (write a literal % as %25)");
+    out += char(high * 16 + low);
+    i += 2;
+  }
+  return out;
+}
+
+// USER, USER:PASSWORD or :PASSWORD (a URL's userinfo).
+void read_credentials(const std::string& userinfo, const std::string& shown_url, RedisAddress& address) {
+  const auto colon = userinfo.find(':');
+  address.user = percent_decoded(userinfo.substr(0, colon), "user", shown_url);
+  if (colon != std::string::npos) address.password = percent_decoded(userinfo.substr(colon + 1), "password", shown_url);
+}
+
+// HOST[:PORT][/DB]
+void read_location(std::string rest, const std::string& shown_url, RedisAddress& address) {
   if (const auto slash = rest.find('/'); slash != std::string::npos) {
     const std::string db = rest.substr(slash + 1);
     if (db.empty() || db.size() > 2 || db.find_first_not_of("0123456789") != std::string::npos)
-      throw std::invalid_argument("the Redis database in " + url + " must be a number 0-99");
+      throw std::invalid_argument("the Redis database in " + shown_url + " must be a number 0-99");
     address.db = std::stoi(db);
     rest.erase(slash);
   }
   if (const auto colon = rest.rfind(':'); colon != std::string::npos) {
     const std::string port = rest.substr(colon + 1);
     if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos || std::stoi(port) > 65535)
-      throw std::invalid_argument("the Redis port in " + url + " must be a number 1-65535");
+      throw std::invalid_argument("the Redis port in " + shown_url + " must be a number 1-65535");
     address.port = std::stoi(port);
     rest.erase(colon);
   }
-  if (rest.empty()) throw std::invalid_argument("the Redis URL " + url + " names no host (redis://HOST:PORT[/DB])");
+  if (rest.empty()) throw std::invalid_argument("the Redis URL " + shown_url + " names no host (redis://HOST:PORT[/DB])");
   address.host = rest;
+}
+
+}  // namespace
+
+std::string redacted_store_url(const std::string& url) {
+  const auto at = url.rfind('@');
+  if (url.rfind(kRedisScheme, 0) != 0 || at == std::string::npos) return url;
+  return kRedisScheme + "***" + url.substr(at);
+}
+
+RedisAddress parse_redis_url(const std::string& url) {
+  const std::string shown = redacted_store_url(url);
+  if (url.rfind(kRedisScheme, 0) != 0) throw std::invalid_argument("not a redis:// URL: " + shown);
+  RedisAddress address;
+  std::string rest = url.substr(kRedisScheme.size());
+  // The last @: a password may hold an unencoded @ or /, a host, port or database never does.
+  if (const auto at = rest.rfind('@'); at != std::string::npos) {
+    read_credentials(rest.substr(0, at), shown, address);
+    rest.erase(0, at + 1);
+  }
+  read_location(rest, shown, address);
+  return address;
+}
+
+std::unique_ptr<UploadStore> open_upload_store(const std::string& url, StoreOptions options, const std::string& password) {
+  if (url.rfind(kRedisScheme, 0) != 0) return open_directory_store(url.rfind("dir:", 0) == 0 ? url.substr(4) : url, std::move(options));
+  RedisAddress address = parse_redis_url(url);
+  if (address.password.empty()) address.password = password;  // the URL's, when it has one, comes first
+  if (!address.user.empty() && address.password.empty())
+    throw std::invalid_argument("the Redis URL " + redacted_store_url(url) +
+                                " names a user but no password: give it as redis://USER:PASSWORD@HOST or in " + kRedisPasswordVariable);
   return open_redis_store(address, std::move(options));
 }
 

@@ -49,6 +49,14 @@ class StoreUnavailableError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Redis refused the credentials, or wants a password and none was given: a configuration error
+/// like an evicting Redis, so fatal when found at start; found later (Redis restarted with another
+/// password) it reaches requests and /readyz as StoreUnavailableError. Its message never holds the
+/// password.
+class StoreAuthError : public std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 /// The store did not answer within its timeout (a hung Redis): the request waited for nothing.
 /// Consecutive ones open the circuit breaker (server/store_breaker.h).
 class StoreTimeoutError : public StoreUnavailableError {
@@ -114,20 +122,38 @@ std::unique_ptr<UploadStore> open_directory_store(const std::string& path, Store
 /// Connections are opened on demand and reopened after errors, so Redis may start later or
 /// restart: a pooled connection that Redis closed is dropped before use, and an operation safe to
 /// repeat that fails because its connection was closed is retried once on a new connection.
-/// A timeout throws StoreTimeoutError. Redis must not evict keys on its own (that would lose
-/// uploads silently): an evicting maxmemory-policy is refused. \throw std::runtime_error for such a Redis
+/// With a password, every new connection (the first, and each one after Redis closed the last)
+/// sends AUTH before anything else. A timeout throws StoreTimeoutError. Redis must not evict
+/// keys on its own (that would lose uploads silently): an evicting maxmemory-policy is refused.
+/// \throw std::runtime_error for such a Redis, StoreAuthError when Redis refuses the password or
+/// wants one
 struct RedisAddress {
   std::string host = "127.0.0.1";
   int port = 6379;
   int db = 0;
+  std::string user;      ///< an ACL user ("": Redis' default user)
+  std::string password;  ///< "": no AUTH
   std::string key_prefix = "featureline";
   std::chrono::milliseconds timeout{2000};  ///< connect and per-command timeout
 };
 std::unique_ptr<UploadStore> open_redis_store(const RedisAddress& address, StoreOptions options);
 
-/// Opens a store from a flag's value: "redis://HOST:PORT[/DB]", "dir:PATH" or a plain PATH.
-/// \throw std::invalid_argument for a malformed URL, and what the backends throw
-std::unique_ptr<UploadStore> open_upload_store(const std::string& url, StoreOptions options);
+/// The environment variable that gives the Redis password when the store URL has none, so that
+/// it need not be on a command line (which every user of the machine can read).
+inline constexpr const char* kRedisPasswordVariable = "FEATURELINE_REDIS_PASSWORD";
+
+/// "redis://[[USER][:PASSWORD]@]HOST[:PORT][/DB]", user and password percent-encoded (a URL's
+/// userinfo: "redis://USER@HOST" names a user and no password).
+/// \throw std::invalid_argument, its message showing the URL redacted
+RedisAddress parse_redis_url(const std::string& url);
+
+/// `url` fit for logs and errors: a redis:// URL's user and password replaced by "***".
+std::string redacted_store_url(const std::string& url);
+
+/// Opens a store from a flag's value: "redis://..." (parse_redis_url), "dir:PATH" or a plain
+/// PATH. `password` is Redis' when the URL has none (from kRedisPasswordVariable); a folder
+/// ignores it. \throw std::invalid_argument for a malformed URL, and what the backends throw
+std::unique_ptr<UploadStore> open_upload_store(const std::string& url, StoreOptions options, const std::string& password = "");
 
 /// The header line both backends keep with the bytes: {"format": ..., "uploaded_at": ..., "bytes": N}.
 std::string upload_meta_json(const StoredUpload& upload);

@@ -189,31 +189,58 @@ class RedisStore final : public UploadStore {
     unavailable(f.detail);
   }
 
+  // A new connection, authenticated, on its database, its eviction policy checked.
   Context connect() const {
     Context c(redisConnectWithTimeout(address_.host.c_str(), address_.port, to_timeval(address_.timeout)));
     const int saved_errno = errno;
     if (!c) unavailable("out of memory");
     if (c->err) fail(failure_of(c.get(), saved_errno));
     redisSetTimeout(c.get(), to_timeval(address_.timeout));
-    auto command = [&](Command cmd) {
-      Reply r(static_cast<redisReply*>(redisCommandArgv(c.get(), int(cmd.argv.size()), cmd.argv.data(), cmd.lengths.data())));
-      const int command_errno = errno;
-      if (!r) fail(failure_of(c.get(), command_errno));
-      return r;
-    };
+    authenticate(c.get());
     if (address_.db != 0) {
       const std::string db = std::to_string(address_.db);
-      if (auto r = command({"SELECT", db}); is_error(r.get())) unavailable("SELECT " + db + ": " + text(r.get()));
+      if (auto r = command(c.get(), {"SELECT", db}); is_error(r.get())) unavailable("SELECT " + db + ": " + text(r.get()));
     }
-    // An evicting policy would drop uploads without a word: refuse such a Redis.
-    auto policy = command({"CONFIG", "GET", "maxmemory-policy"});
-    if (policy->type == REDIS_REPLY_ARRAY && policy->elements == 2 && policy->element[1]->type == REDIS_REPLY_STRING) {
-      const std::string value(policy->element[1]->str, policy->element[1]->len);
-      if (value != "noeviction")
-        throw std::runtime_error("Redis at " + describe() + " evicts keys (maxmemory-policy " + value +
-                                 "), which would lose uploads silently; configure maxmemory-policy noeviction");
-    }
+    check_eviction_policy(c.get());
     return c;
+  }
+
+  // One command during connect(). Redis answers NOAUTH to anything before AUTH when it has a
+  // password: without one of ours that is a configuration error, not an outage.
+  Reply command(redisContext* c, Command cmd) const {
+    Reply r(static_cast<redisReply*>(redisCommandArgv(c, int(cmd.argv.size()), cmd.argv.data(), cmd.lengths.data())));
+    const int command_errno = errno;
+    if (!r) fail(failure_of(c, command_errno));
+    if (is_error(r.get()) && text(r.get()).rfind("NOAUTH", 0) == 0)
+      throw StoreAuthError("Redis at " + describe() + " requires a password and none was given: set " + kRedisPasswordVariable +
+                           " or give it in the store URL (redis://:PASSWORD@HOST:PORT)");
+    return r;
+  }
+
+  // AUTH first on every new connection (Redis forgets it when the connection closes). Redis'
+  // refusal never repeats the password it was sent.
+  void authenticate(redisContext* c) const {
+    if (address_.password.empty()) return;
+    const Reply r = address_.user.empty() ? command(c, {"AUTH", address_.password})
+                                          : command(c, {"AUTH", address_.user, address_.password});
+    if (!is_error(r.get())) return;
+    const std::string refusal = text(r.get());
+    if (refusal.find("WRONGPASS") != std::string::npos || refusal.find("invalid password") != std::string::npos)
+      throw StoreAuthError("Redis at " + describe() + " refused the password" +
+                           (address_.user.empty() ? "" : " of the user in the store URL") + " (" + refusal + "); check " +
+                           kRedisPasswordVariable + " or the store URL");
+    throw StoreAuthError("Redis at " + describe() + " refused AUTH: " + refusal);
+  }
+
+  // An evicting policy would drop uploads without a word: refuse such a Redis. (A user without
+  // the right to CONFIG gets an error reply: nothing to check then.)
+  void check_eviction_policy(redisContext* c) const {
+    auto policy = command(c, {"CONFIG", "GET", "maxmemory-policy"});
+    if (policy->type != REDIS_REPLY_ARRAY || policy->elements != 2 || policy->element[1]->type != REDIS_REPLY_STRING) return;
+    const std::string value(policy->element[1]->str, policy->element[1]->len);
+    if (value != "noeviction")
+      throw std::runtime_error("Redis at " + describe() + " evicts keys (maxmemory-policy " + value +
+                               "), which would lose uploads silently; configure maxmemory-policy noeviction");
   }
 
   Context connect_for_request() const {

@@ -5,8 +5,11 @@
 # liveness and startup on /healthz, readiness on /readyz, hashing on the mesh id, nginx/ingress
 # edge limits) and meet what deploy_yaml_check.py asks of them (scripts/cluster.sh's
 # --http-threads, memory from --cache-mb, preStop and grace period, PodDisruptionBudget, HPA,
-# spread, pinned images, the restricted Pod Security Standard, network policies), each check
-# shown to fail on a copy broken for it; the image is multi-stage
+# spread, pinned images, the restricted Pod Security Standard, network policies, Redis'
+# password from an operator's Secret or env file and never a literal), each check shown to fail
+# on a copy broken for it; Redis started as each file's container starts it (a local
+# redis-server, the image's paths mapped) wants the password, has protected mode on and passes
+# its own probe with the password only; the image is multi-stage
 # and non-root, its build packages are among scripts/setup.sh's, and its runtime packages own
 # every shared library the tested server binary links (ldd + dpkg -S).
 #
@@ -15,7 +18,7 @@ set -u
 
 # shellcheck source=lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"  # HERE, ROOT (the working directory), SERVER, SHARED, MESHES, VR, VG, JOBS
-for tool in python3 dpkg ldd; do command -v "$tool" >/dev/null || { echo "FAIL $tool is missing"; exit 1; }; done
+for tool in python3 dpkg ldd ss; do command -v "$tool" >/dev/null || { echo "FAIL $tool is missing"; exit 1; }; done
 [ -x /usr/sbin/nginx ] || { echo "FAIL nginx is not installed (scripts/setup.sh)"; exit 1; }
 python3 -c 'import yaml' 2>/dev/null || { echo "FAIL python3-yaml is not installed (scripts/setup.sh)"; exit 1; }
 [ -x "$SERVER" ] || { echo "FAIL no server binary at $SERVER"; exit 1; }
@@ -69,7 +72,8 @@ check "deploy_yaml_check.py ran its checks" grep -q '^PASS ' "$TMP/yaml.out"
 mutant() {
   local name=$1 want=$2 file=$3 edit=$4 m="$TMP/mutant"
   rm -rf "$m"; mkdir -p "$m/scripts"
-  cp -r docker "$m/docker"; cp scripts/cluster.sh "$m/scripts/"; cp CMakeLists.txt "$m/"
+  cp -r docker "$m/docker"; cp scripts/cluster.sh "$m/scripts/"; cp CMakeLists.txt .gitignore .dockerignore "$m/"
+  rm -f "$m/docker/redis.env"
   if [ "$file" = scripts/cluster.sh ]; then sed -i "$edit" "$m/$file"
   else
     python3 - "$m/$file" "$edit" <<'PY'
@@ -126,12 +130,119 @@ mutant "Redis open to every pod" "kubernetes: a NetworkPolicy admits only the re
   "obj('NetworkPolicy', 'redis')['spec']['ingress'][0]['from'] = [{'podSelector': {}}]"
 mutant "replicas open to every address" "kubernetes: a NetworkPolicy admits only the ingress controller" $K \
   "obj('NetworkPolicy', 'featureline')['spec']['ingress'][0].pop('from')"
-mutant "a Redis password the replicas do not send" "kubernetes replicas: the store URL carries the password" $K \
-  "obj('StatefulSet', 'redis')['spec']['template']['spec']['containers'][0]['args'] += ['--requirepass', 'x']"
+redis_k='obj("StatefulSet", "redis")["spec"]["template"]["spec"]["containers"][0]'
+mutant "a Redis password the replicas do not send" "kubernetes replicas: FEATURELINE_REDIS_PASSWORD from the Secret" $K \
+  "del $fl_pod['containers'][0]['env']"
+mutant "the replicas' password from another Secret" "kubernetes replicas: FEATURELINE_REDIS_PASSWORD from the Secret" $K \
+  "$fl_pod['containers'][0]['env'][0]['valueFrom']['secretKeyRef']['name'] = 'other'"
+mutant "the password a literal env value" "kubernetes: no password as a literal env value" $K \
+  "$fl_pod['containers'][0]['env'] = [{'name': 'FEATURELINE_REDIS_PASSWORD', 'value': 'x'}]"
+mutant "the password in the store URL" "kubernetes replicas: the store URL carries no password" $K \
+  "a = $fl_pod['containers'][0]['args']; a[a.index('redis://redis:6379')] = 'redis://:x@redis:6379'"
+mutant "a Secret shipped with a password" "kubernetes: no Secret shipped" $K \
+  "docs.append({'apiVersion': 'v1', 'kind': 'Secret', 'metadata': {'name': 'featureline-redis', 'namespace': 'featureline'}, 'stringData': {'password': 'x'}})"
+mutant "Redis' password on its command line" "kubernetes Redis: no --requirepass on its command line" $K \
+  "c = $redis_k; c['args'] = [c['args'][0].split(' - <<')[0] + ' --requirepass \"\$REDISCLI_AUTH\"']"
+mutant "Redis without a password" "kubernetes Redis: requirepass from a Secret's variable" $K \
+  "c = $redis_k; c['args'] = [c['args'][0].split(' - <<')[0]]; del c['env']"
+mutant "Redis' protected mode off" "kubernetes Redis: protected mode on" $K \
+  "c = $redis_k; c['args'] = [c['args'][0].replace('--protected-mode yes', '--protected-mode no')]"
+mutant "Redis' probe without the password" "kubernetes Redis: its probe authenticates" $K \
+  "c = $redis_k; c['readinessProbe']['exec']['command'] = ['redis-cli', 'ping']"
+mutant "compose replicas without the env file" "compose: Redis and the replicas read the same env file" $C \
+  "del docs[0]['services']['featureline']['env_file']"
+mutant "compose env file git does not ignore" "compose: the env file docker/secrets.env is the operator's" $C \
+  "docs[0]['services']['featureline']['env_file'] = docs[0]['services']['redis']['env_file'] = ['secrets.env']"
+mutant "compose password in environment:" "compose: no password in an environment: entry" $C \
+  "docs[0]['services']['featureline']['environment'] = ['FEATURELINE_REDIS_PASSWORD=x']"
+mutant "compose Redis protected mode off" "compose Redis: protected mode on" $C \
+  "c = docs[0]['services']['redis']['command']; c[-1] = c[-1].replace('--protected-mode yes', '--protected-mode no')"
+mutant "compose Redis health check without the password" "compose Redis: its health check authenticates" $C \
+  "docs[0]['services']['redis']['healthcheck']['test'] = ['CMD', 'redis-cli', 'ping']"
 mutant "compose nginx writable" "compose nginx: read-only root file system" $C "del docs[0]['services']['nginx']['read_only']"
 mutant "compose Redis as root" "compose redis: runs as a numeric non-root user" $C "del docs[0]['services']['redis']['user']"
 mutant "compose nginx on Redis' network" "compose: only the replicas share a network with Redis" $C \
   "docs[0]['services']['nginx']['networks'].append('store')"
+
+# ---- Redis started as the compose file's and the manifest's containers start it ------------------
+# Their start-up command and probe, run here with redis-server and redis-cli wrapped: the image's
+# paths mapped to deploy/redis.conf and a temporary folder, loopback and a free port added.
+if command -v redis-server >/dev/null && command -v redis-cli >/dev/null; then
+  mkdir -p "$TMP/bin"
+  cat >"$TMP/bin/redis-server" <<'SH'
+#!/bin/bash
+args=()
+for a in "$@"; do
+  case "$a" in
+    /etc/redis/redis.conf) args+=("$DEPLOY_ROOT/deploy/redis.conf") ;;
+    /data) args+=("$DEPLOY_DATA") ;;
+    *) args+=("$a") ;;
+  esac
+done
+here=(--port "$DEPLOY_PORT" --bind 127.0.0.1)
+if [ "${args[-1]:-}" = - ]; then args=("${args[@]:0:${#args[@]}-1}" "${here[@]}" -); else args+=("${here[@]}"); fi
+exec /usr/bin/redis-server "${args[@]}"
+SH
+  printf '#!/bin/bash\nexec /usr/bin/redis-cli -p "$DEPLOY_PORT" "$@"\n' >"$TMP/bin/redis-cli"
+  chmod +x "$TMP/bin/redis-server" "$TMP/bin/redis-cli"
+  # container_redis FILE OUT: OUT.start and OUT.probe (NUL-separated argv: Compose's "$$" as "$"),
+  # OUT.vars (the variables that carry the password in Redis' container).
+  container_redis() {
+    python3 - "$1" "$2" <<'PY'
+import sys, yaml
+path, out = sys.argv[1], sys.argv[2]
+docs = [d for d in yaml.safe_load_all(open(path)) if d]
+if "services" in docs[0]:
+    r = docs[0]["services"]["redis"]
+    start, test = r["command"], r["healthcheck"]["test"]
+    probe = ["sh", "-c", test[1]] if test[0] == "CMD-SHELL" else test[1:]
+    start, probe = [a.replace("$$", "$") for a in start], [a.replace("$$", "$") for a in probe]
+    names = ["FEATURELINE_REDIS_PASSWORD"]
+else:
+    c = next(d for d in docs if d["kind"] == "StatefulSet")["spec"]["template"]["spec"]["containers"][0]
+    start, probe = c.get("command", []) + c.get("args", []), c["readinessProbe"]["exec"]["command"]
+    names = [e["name"] for e in c.get("env", []) if "secretKeyRef" in e.get("valueFrom", {})]
+for ext, argv in (("start", start), ("probe", probe)):
+    open(out + "." + ext, "w").write("".join(a + "\0" for a in argv))
+open(out + ".vars", "w").write("\n".join(names) + "\n")
+PY
+  }
+  fails_quietly() { ! "$@" 2>/dev/null; }
+  # container_env PASSWORD OUT: CONTAINER_ENV, for env: OUT.vars set to PASSWORD, the wrappers first.
+  container_env() {
+    local v
+    CONTAINER_ENV=(PATH="$TMP/bin:$PATH" DEPLOY_ROOT="$ROOT" DEPLOY_DATA="$DEPLOY_DATA" DEPLOY_PORT="$DEPLOY_PORT")
+    while IFS= read -r v; do [ -n "$v" ] && CONTAINER_ENV+=("$v=$1"); done <"$2.vars"
+  }
+  for file in $C $K; do
+    name=${file#docker/}; out="$TMP/redis-$name"
+    DEPLOY_DATA="$TMP/data-$name"; mkdir -p "$DEPLOY_DATA"
+    DEPLOY_PORT=""
+    for _ in $(seq 1 50); do p=$((20000 + RANDOM % 40000)); ss -Htln "sport = :$p" | grep -q . || { DEPLOY_PORT=$p; break; }; done
+    container_redis "$file" "$out" || { fail "$name: Redis' command and probe read"; continue; }
+    mapfile -d '' start <"$out.start"; mapfile -d '' probe <"$out.probe"
+    pw="t$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')"
+    container_env "$pw" "$out"
+    env "${CONTAINER_ENV[@]}" "${start[@]}" >"$out.log" 2>&1 &
+    pid=$!
+    BG_PIDS+=("$pid")
+    for _ in $(seq 1 50); do REDISCLI_AUTH="$pw" redis-cli -p "$DEPLOY_PORT" ping 2>/dev/null | grep -q PONG && break; sleep 0.1; done
+    check "$name: Redis as its container starts it answers with the password" \
+      bash -c "REDISCLI_AUTH='$pw' redis-cli -p '$DEPLOY_PORT' ping | grep -q PONG"
+    check "$name: ... and refuses commands without it (NOAUTH)" bash -c "redis-cli -p '$DEPLOY_PORT' ping | grep -q NOAUTH"
+    check_eq "$name: ... protected mode on" \
+      "$(REDISCLI_AUTH="$pw" redis-cli -p "$DEPLOY_PORT" config get protected-mode | tail -n 1)" yes
+    check_eq "$name: ... Redis itself is the container's first process (exec)" "$(cat "/proc/$pid/comm" 2>/dev/null)" redis-server
+    check "$name: ... the password is on no command line" bash -c "! cat /proc/$pid/cmdline | tr '\0' ' ' | grep -qF '$pw'"
+    check "$name: its probe passes with the password" env "${CONTAINER_ENV[@]}" "${probe[@]}"
+    container_env wrong "$out"
+    check "$name: its probe fails with another one" fails_quietly env "${CONTAINER_ENV[@]}" "${probe[@]}"
+    stop_pids 50 "$pid"
+    wait "$pid" 2>/dev/null
+  done
+else
+  fail "redis-server and redis-cli are installed (scripts/setup.sh)"
+fi
 
 # ---- the image
 D=docker/Dockerfile.server

@@ -86,6 +86,44 @@ def memory_budget_ok(limit_mib, cache_mb):
     return limit_mib is not None and limit_mib >= 2 * cache_mb + 256
 
 
+# ---- Redis' password
+PASSWORD_VAR = "FEATURELINE_REDIS_PASSWORD"
+
+
+def secretish(name):
+    return re.search(r'PASS|AUTH|SECRET|TOKEN', name.upper()) is not None
+
+
+def secret_refs(container):
+    """{env name: (Secret, key)} for a container's variables taken from a Secret."""
+    refs = {}
+    for e in container.get("env", []):
+        ref = e.get("valueFrom", {}).get("secretKeyRef")
+        if ref:
+            refs[e["name"]] = (ref.get("name"), ref.get("key"))
+    return refs
+
+
+def reads_password_on_stdin(script, var, dollar=r'\$'):
+    """redis-server's last argument "-" (configuration on standard input) and a here-document
+    giving requirepass from $var."""
+    return (re.search(r'redis-server\b[^<]*\s-\s*<<\s*\'?(\w+)', script) is not None and
+            re.search(r'requirepass\s+"?' + dollar + r'\{?' + var + r'\b', script) is not None)
+
+
+def protected_mode_off(script):
+    return re.search(r'protected-mode\s+"?no', script) is not None
+
+
+def ignored(path, patterns_file):
+    """Whether a line of ROOT/patterns_file names path exactly (the operator's own file)."""
+    try:
+        lines = {l.strip() for l in read(patterns_file).splitlines()}
+    except OSError:
+        return False
+    return path in lines or "/" + path in lines
+
+
 # ---- compose
 compose = yaml.safe_load(read("docker/compose.yaml"))
 services = compose.get("services", {})
@@ -121,6 +159,38 @@ compose_cache = int(flag(fl_cmd, "--cache-mb") or cache_default)
 compose_limit = fl.get("deploy", {}).get("resources", {}).get("limits", {}).get("memory")
 check("compose replicas' memory limit >= 2 x --cache-mb (%d) + 256 MiB (%s)" % (compose_cache, compose_limit),
       memory_budget_ok(memory_mib(compose_limit, binary_suffixes_only=True), compose_cache))
+redis_svc = services.get("redis", {})
+
+
+def env_files(service):
+    files = service.get("env_file", [])
+    files = [files] if isinstance(files, str) else files
+    return sorted(f if isinstance(f, str) else f.get("path", "") for f in files)
+
+
+check("compose: Redis and the replicas read the same env file", env_files(redis_svc) and env_files(redis_svc) == env_files(fl),
+      (env_files(redis_svc), env_files(fl)))
+for f in env_files(redis_svc):
+    check("compose: the env file docker/%s is the operator's: git and image builds ignore it" % f,
+          ignored("docker/" + f, ".gitignore") and ignored("docker/" + f, ".dockerignore"))
+compose_redis = " ".join(str(a) for a in redis_svc.get("command", []))
+check("compose Redis: requirepass from $%s, on standard input (redis-server ... - <<EOF)" % PASSWORD_VAR,
+      reads_password_on_stdin(compose_redis, PASSWORD_VAR, dollar=r'\$\$'), compose_redis)
+check("compose Redis: no --requirepass on its command line", "--requirepass" not in compose_redis)
+check("compose Redis: protected mode on", not protected_mode_off(compose_redis))
+redis_health = " ".join(str(a) for a in redis_svc.get("healthcheck", {}).get("test", []))
+check("compose Redis: its health check authenticates (REDISCLI_AUTH) and wants PONG",
+      "REDISCLI_AUTH=" in redis_health and PASSWORD_VAR in redis_health and "PONG" in redis_health, redis_health)
+check("compose replicas: the store URL carries no password", not any(re.match(r'redis://[^/]*@', a) for a in fl_cmd), fl_cmd)
+
+
+def environment_names(service):
+    env = service.get("environment", {})
+    return list(env) if isinstance(env, dict) else [str(e).split("=", 1)[0] for e in env]
+
+
+env_literals = [(n, k) for n, s in services.items() for k in environment_names(s) if secretish(k)]
+check("compose: no password in an environment: entry", not env_literals, env_literals)
 redis_nets = services.get("redis", {}).get("networks", [])
 sharing = {n for n, s in services.items() if n != "redis" and set(s.get("networks", [])) & set(redis_nets)}
 check("compose: only the replicas share a network with Redis", redis_nets and sharing == {"featureline"}, sharing)
@@ -162,7 +232,7 @@ for probe, path in (("startupProbe", "/healthz"), ("livenessProbe", "/healthz"),
 check("kubernetes: readiness timeout above the store's 2 s", c.get("readinessProbe", {}).get("timeoutSeconds", 1) > 2)
 startup = c.get("startupProbe", {})
 check("kubernetes: the startup probe allows 30 s", startup.get("periodSeconds", 10) * startup.get("failureThreshold", 3) >= 30)
-check("kubernetes replicas use the Redis store", any(a.startswith("redis://") and a.endswith("@redis:6379") or a == "redis://redis:6379" for a in args))
+check("kubernetes replicas use the Redis store", "redis://redis:6379" in args)
 for name, want in cluster_flags.items():
     check("kubernetes replicas' %s is scripts/cluster.sh's (%s)" % (name, want), flag(args, name) == want, flag(args, name))
 
@@ -253,13 +323,30 @@ tmp_vols = {m["name"] for m in c.get("volumeMounts", []) if m.get("mountPath") =
 check("kubernetes: the replicas' /tmp is a writable emptyDir",
       any(v.get("name") in tmp_vols and "emptyDir" in v for v in pod.get("volumes", [])))
 
-# Redis: a password where the replicas can send one, otherwise only reachable by the replicas.
+# Redis' password: in a Secret the operator creates (none shipped), read by Redis on standard
+# input and by the replicas from FEATURELINE_REDIS_PASSWORD; never a literal, never in a URL.
 sts = by_kind.get("StatefulSet", [{}])[0]
-redis_args = [str(a) for a in sts.get("spec", {}).get("template", {}).get("spec", {}).get("containers", [{}])[0].get("args", [])]
-check("kubernetes Redis: durable and never evicting", "noeviction" in redis_args and "appendonly" in " ".join(redis_args))
-if "--requirepass" in redis_args:
-    check("kubernetes Redis: protected-mode on with a password", flag(redis_args, "--protected-mode") in (None, "yes"))
-    check("kubernetes replicas: the store URL carries the password", any(re.match(r'redis://:[^@]+@', a) for a in args))
+redis_c = sts.get("spec", {}).get("template", {}).get("spec", {}).get("containers", [{}])[0]
+redis_script = " ".join(str(a) for a in redis_c.get("command", []) + redis_c.get("args", []))
+check("kubernetes Redis: durable and never evicting",
+      re.search(r'--maxmemory-policy\s+noeviction', redis_script) and re.search(r'--appendonly\s+yes', redis_script), redis_script)
+redis_refs, replica_refs = secret_refs(redis_c), secret_refs(c)
+auth_vars = [v for v in redis_refs if reads_password_on_stdin(redis_script, v)]
+check("kubernetes Redis: requirepass from a Secret's variable, on standard input (redis-server ... - <<EOF)",
+      auth_vars, redis_refs)
+check("kubernetes Redis: no --requirepass on its command line", "--requirepass" not in redis_script)
+check("kubernetes Redis: protected mode on", not protected_mode_off(redis_script))
+probe = " ".join(str(a) for a in redis_c.get("readinessProbe", {}).get("exec", {}).get("command", []))
+check("kubernetes Redis: its probe authenticates (REDISCLI_AUTH from the Secret) and wants PONG",
+      "REDISCLI_AUTH" in redis_refs and "redis-cli" in probe and "PONG" in probe, probe)
+check("kubernetes replicas: %s from the Secret Redis reads" % PASSWORD_VAR,
+      auth_vars and replica_refs.get(PASSWORD_VAR) is not None and replica_refs.get(PASSWORD_VAR) == redis_refs[auth_vars[0]],
+      replica_refs)
+check("kubernetes replicas: the store URL carries no password", not any(re.match(r'redis://[^/]*@', a) for a in args), args)
+check("kubernetes: no Secret shipped (the operator creates featureline-redis)", "Secret" not in by_kind)
+literal = [(d["metadata"]["name"], e["name"]) for d in by_kind.get("Deployment", []) + by_kind.get("StatefulSet", [])
+           for ct in d["spec"]["template"]["spec"].get("containers", []) for e in ct.get("env", []) if "value" in e and secretish(e["name"])]
+check("kubernetes: no password as a literal env value", not literal, literal)
 
 
 def policy_for(labels):

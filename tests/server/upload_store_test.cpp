@@ -1,6 +1,7 @@
 // The upload store (sessions that survive restarts and replicas): the directory backend, the Redis backend against a real
-// redis-server started here on a free loopback port, and DurableSessions (rebuild on a miss,
-// restarts, single flight, what a 404 says, nothing kept when the store refuses).
+// redis-server started here on a free loopback port (also with requirepass and an ACL user),
+// the store URL and its credentials, and DurableSessions (rebuild on a miss, restarts, single
+// flight, what a 404 says, nothing kept when the store refuses).
 #include <gtest/gtest.h>
 
 #include <arpa/inet.h>
@@ -15,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <thread>
+#include <vector>
 
 #include "engine/errors.h"
 #include "engine/prepared_mesh.h"
@@ -172,6 +174,55 @@ TEST(UploadStoreUrl, ParsesRedisAndFolderForms) {
   EXPECT_THROW(open_upload_store("redis://:6379", {}), std::invalid_argument);
 }
 
+TEST(UploadStoreUrl, ReadsPercentEncodedCredentials) {
+  const RedisAddress a = parse_redis_url("redis://:s3cr%2Ft%40x%3a%25@redis.example:6380/3");
+  EXPECT_EQ(a.user, "");
+  EXPECT_EQ(a.password, "s3cr/t@x:%");
+  EXPECT_EQ(a.host, "redis.example");
+  EXPECT_EQ(a.port, 6380);
+  EXPECT_EQ(a.db, 3);
+  // Unencoded @, / and : in a password: the last @ ends it, the first : after the user starts it.
+  const RedisAddress b = parse_redis_url("redis://featureline:p@ss/w:rd@10.0.0.5");
+  EXPECT_EQ(b.user, "featureline");
+  EXPECT_EQ(b.password, "p@ss/w:rd");
+  EXPECT_EQ(b.host, "10.0.0.5");
+  EXPECT_EQ(b.port, 6379);
+  EXPECT_EQ(b.db, 0);
+  const RedisAddress c = parse_redis_url("redis://featureline@h:1");  // a user, no password
+  EXPECT_EQ(c.user, "featureline");
+  EXPECT_EQ(c.password, "");
+  const RedisAddress d = parse_redis_url("redis://h:1/2");
+  EXPECT_EQ(d.user + d.password, "");
+}
+
+TEST(UploadStoreUrl, ShowsCredentialsNowhere) {
+  EXPECT_EQ(redacted_store_url("redis://user:secret@h:1/2"), "redis://***@h:1/2");
+  EXPECT_EQ(redacted_store_url("redis://:p@ss@h"), "redis://***@h");
+  EXPECT_EQ(redacted_store_url("redis://h:1/2"), "redis://h:1/2");
+  EXPECT_EQ(redacted_store_url("dir:/srv/a@b"), "dir:/srv/a@b");
+  for (const std::string url : {"redis://:secret%zz@h:1", "redis://:secret@h:notaport", "redis://:secret@h/100", "redis://:secret@"}) {
+    try {
+      parse_redis_url(url);
+      ADD_FAILURE() << "accepted a malformed URL";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).find("secret"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("redis://***@"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(UploadStoreUrl, APasswordFromElsewhereWhenTheUrlHasNone) {
+  // Nothing listens on port 1: the store opens (Redis may come later).
+  EXPECT_EQ(open_upload_store("redis://ci@127.0.0.1:1", {}, "from-the-environment")->describe(), "redis 127.0.0.1:1/0");
+  try {
+    open_upload_store("redis://ci@127.0.0.1:1", {});
+    ADD_FAILURE() << "a user without a password was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("names a user but no password"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(kRedisPasswordVariable), std::string::npos) << e.what();
+  }
+}
+
 // ---- Redis ------------------------------------------------------------------------------------
 
 int free_loopback_port() {
@@ -203,15 +254,21 @@ bool port_answers(int port) {
 // A real redis-server on a free loopback port, without persistence, stopped by its PID.
 class RedisProcess {
  public:
-  explicit RedisProcess(std::string policy = "noeviction", int port = 0) : port_(port != 0 ? port : free_loopback_port()) {
-    const std::string port_text = std::to_string(port_);
+  /// `extra`: more redis-server arguments (--requirepass, --user).
+  explicit RedisProcess(std::string policy = "noeviction", int port = 0, std::vector<std::string> extra = {})
+      : port_(port != 0 ? port : free_loopback_port()) {
+    std::vector<std::string> args = {"redis-server", "--port", std::to_string(port_), "--bind", "127.0.0.1", "--save", "",
+                                     "--appendonly", "no", "--maxmemory", "8mb", "--maxmemory-policy", policy,
+                                     "--loglevel", "warning", "--dir", "/tmp"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
     pid_ = fork();
     if (pid_ == 0) {
       const int null = open("/dev/null", O_WRONLY);  // Redis' start-up banner is not test output
       dup2(null, 1);
-      execl("/usr/bin/redis-server", "redis-server", "--port", port_text.c_str(), "--bind", "127.0.0.1", "--save", "",
-            "--appendonly", "no", "--maxmemory", "8mb", "--maxmemory-policy", policy.c_str(), "--loglevel", "warning",
-            "--dir", "/tmp", static_cast<char*>(nullptr));
+      execv("/usr/bin/redis-server", argv.data());
       _exit(127);
     }
     for (int i = 0; i < 100 && !port_answers(port_); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -390,6 +447,128 @@ TEST(RedisStore, RefusesARedisThatEvictsKeys) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("maxmemory-policy allkeys-lru"), std::string::npos) << e.what();
   }
+}
+
+// ---- Redis with a password --------------------------------------------------------------------
+
+const std::string kPassword = "pw-7f3a9c0e5b1d";
+
+RedisAddress address_with(int port, std::string password, std::string user = "") {
+  RedisAddress a = address_of(port);
+  a.password = std::move(password);
+  a.user = std::move(user);
+  return a;
+}
+
+// What open_redis_store threw, "" when it opened.
+std::string auth_error_at_open(const RedisAddress& address) {
+  try {
+    open_redis_store(address, {});
+  } catch (const StoreAuthError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// A store opened before Redis starts, used across two restarts: every new connection,
+// including those that replace the pooled ones Redis closed, authenticates.
+TEST(RedisAuth, ThePasswordIsSentOnEveryNewConnection) {
+  const int port = free_loopback_port();
+  auto store = open_redis_store(address_with(port, kPassword), {});  // nothing listens yet
+  for (int run = 0; run < 2; ++run) {
+    RedisProcess redis("noeviction", port, {"--requirepass", kPassword});
+    ASSERT_TRUE(redis.up());
+    std::atomic<int> failures{0};
+    std::vector<std::thread> threads;  // several connections in the pool
+    for (int i = 0; i < 6; ++i) {
+      threads.emplace_back([&] {
+        try {
+          store->put(kId, upload_of("x"));
+        } catch (const StoreUnavailableError&) {
+          ++failures;
+        }
+      });
+    }
+    for (auto& t : threads) t.join();
+    for (int i = 0; i < 10; ++i) {
+      try {
+        store->put(kOtherId, upload_of("y"));
+        failures += store->get(kOtherId).upload.has_value() ? 0 : 1;
+      } catch (const StoreUnavailableError& e) {
+        if (failures++ == 0) ADD_FAILURE() << e.what();
+      }
+    }
+    EXPECT_EQ(failures, 0) << "run " << run;
+  }
+}
+
+TEST(RedisAuth, AWrongPasswordIsRefusedAtOpenAndNotShown) {
+  RedisProcess redis("noeviction", 0, {"--requirepass", kPassword});
+  ASSERT_TRUE(redis.up());
+  const std::string error = auth_error_at_open(address_with(redis.port(), "wrong-password-31d4"));
+  EXPECT_NE(error.find("refused the password"), std::string::npos) << error;
+  EXPECT_NE(error.find(kRedisPasswordVariable), std::string::npos) << error;
+  EXPECT_EQ(error.find("wrong-password-31d4"), std::string::npos) << error;
+  EXPECT_EQ(error.find(kPassword), std::string::npos) << error;
+}
+
+TEST(RedisAuth, NoPasswordForARedisThatWantsOneIsRefusedAtOpen) {
+  RedisProcess redis("noeviction", 0, {"--requirepass", kPassword});
+  ASSERT_TRUE(redis.up());
+  for (int db : {0, 2}) {  // NOAUTH answers CONFIG GET, or SELECT before it
+    RedisAddress address = address_of(redis.port());
+    address.db = db;
+    const std::string error = auth_error_at_open(address);
+    EXPECT_NE(error.find("requires a password and none was given"), std::string::npos) << error;
+    EXPECT_NE(error.find(kRedisPasswordVariable), std::string::npos) << error;
+  }
+}
+
+TEST(RedisAuth, APasswordForARedisWithoutOneIsRefused) {
+  RedisProcess redis;
+  ASSERT_TRUE(redis.up());
+  const std::string error = auth_error_at_open(address_with(redis.port(), kPassword));
+  EXPECT_NE(error.find("refused AUTH"), std::string::npos) << error;
+  EXPECT_EQ(error.find(kPassword), std::string::npos) << error;
+}
+
+// An ACL user that may not run CONFIG (its eviction check is skipped) and may touch only its keys.
+TEST(RedisAuth, AnAclUserAuthenticatesWithItsOwnPassword) {
+  RedisProcess redis("noeviction", 0,
+                     {"--requirepass", "default-user-pw", "--user", "ci", "on", ">" + kPassword, "~test:*", "+@all", "-@dangerous"});
+  ASSERT_TRUE(redis.up());
+  auto store = open_redis_store(address_with(redis.port(), kPassword, "ci"), {});
+  store->put(kId, upload_of("x"));
+  EXPECT_TRUE(store->get(kId).upload.has_value());
+  EXPECT_NE(auth_error_at_open(address_with(redis.port(), kPassword + "-not", "ci")).find("refused the password"), std::string::npos);
+  // The same password for the default user, whose password is another.
+  EXPECT_NE(auth_error_at_open(address_with(redis.port(), kPassword)).find("refused the password"), std::string::npos);
+}
+
+// Redis restarted with another password: operations fail as unavailable (503, /readyz), saying
+// why, until it has the store's password again.
+TEST(RedisAuth, APasswordChangedUnderARunningStoreIsUnavailableUntilItMatches) {
+  const int port = free_loopback_port();
+  std::unique_ptr<UploadStore> store;
+  {
+    RedisProcess redis("noeviction", port, {"--requirepass", kPassword});
+    ASSERT_TRUE(redis.up());
+    store = open_redis_store(address_with(port, kPassword), {});
+    store->put(kId, upload_of("x"));
+  }
+  {
+    RedisProcess changed("noeviction", port, {"--requirepass", "another-password-88"});
+    ASSERT_TRUE(changed.up());
+    try {
+      store->probe();
+      ADD_FAILURE() << "a refused password went unnoticed";
+    } catch (const StoreUnavailableError& e) {
+      EXPECT_NE(std::string(e.what()).find("refused the password"), std::string::npos) << e.what();
+    }
+  }
+  RedisProcess back("noeviction", port, {"--requirepass", kPassword});
+  ASSERT_TRUE(back.up());
+  EXPECT_NO_THROW(store->probe());
 }
 
 // ---- DurableSessions --------------------------------------------------------------------------
