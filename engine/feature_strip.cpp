@@ -5,12 +5,12 @@
 #include <cmath>
 #include <complex>
 #include <limits>
-#include <unordered_map>
 
 #include <Eigen/Sparse>
 
 #include "engine/errors.h"
 #include "engine/internal/geometry.h"
+#include "engine/internal/vertex_map.h"
 
 namespace featureline {
 namespace {
@@ -109,43 +109,47 @@ FeatureStrip extract_feature_strip(const PreparedMesh& pm, const std::vector<std
     strip.rings = edges >= 8 * dense ? 8 : edges >= 4 * dense ? 6 : edges >= 2 * dense ? 4 : edges >= dense ? 3 : 2;
   }
 
-  std::unordered_map<std::uint32_t, std::uint32_t> local;
-  local.reserve(line.size() * 16);
-  auto add_vertex = [&](std::uint32_t v, int ring) {
-    auto [it, inserted] = local.emplace(v, std::uint32_t(strip.vertices.size()));
-    if (inserted) {
-      strip.vertices.push_back(v);
-      strip.ring.push_back(ring);
-    }
-    return it->second;
+  StampedMap& local = stamped_map(0);  // mesh vertex -> local index
+  local.begin(pm.n_vertices());
+  auto add_vertex = [&](std::uint32_t v, int ring, std::uint32_t line_position) {
+    if (local.contains(v)) return local.at(v);
+    const auto index = std::uint32_t(strip.vertices.size());
+    local.set(v, index);
+    strip.vertices.push_back(v);
+    strip.ring.push_back(ring);
+    strip.line_position.push_back(line_position);
+    return index;
   };
-  for (auto v : line) strip.line.push_back(add_vertex(v, 0));
+  for (std::size_t i = 0; i < line.size(); ++i) strip.line.push_back(add_vertex(line[i], 0, std::uint32_t(i)));
   // Breadth-first rings over the vertex adjacency.
   std::size_t ring_begin = 0;
   for (int ring = 1; ring <= strip.rings; ++ring) {
     const std::size_t ring_end = strip.vertices.size();
     for (std::size_t i = ring_begin; i < ring_end; ++i) {
       const auto v = strip.vertices[i];
-      for (auto k = pm.neighbor_offsets[v]; k < pm.neighbor_offsets[v + 1]; ++k) add_vertex(pm.neighbors[k], ring);
+      for (auto k = pm.neighbor_offsets[v]; k < pm.neighbor_offsets[v + 1]; ++k)
+        add_vertex(pm.neighbors[k], ring, strip.line_position[i]);
     }
     ring_begin = ring_end;
   }
   // Faces: every face of a vertex in rings < k whose three corners are in the strip.
+  StampedMap& local_face = stamped_map(1);  // mesh face -> local triangle (here: seen)
+  local_face.begin(pm.triangles.size());
   std::vector<std::uint32_t> faces;
   for (std::size_t i = 0; i < strip.vertices.size(); ++i) {
     if (strip.ring[i] >= strip.rings) continue;
-    faces.insert(faces.end(), pm.vertex_faces.begin(strip.vertices[i]), pm.vertex_faces.end(strip.vertices[i]));
+    for (auto f = pm.vertex_faces.begin(strip.vertices[i]); f != pm.vertex_faces.end(strip.vertices[i]); ++f)
+      if (!local_face.contains(*f)) local_face.set(*f, 0), faces.push_back(*f);
   }
-  std::sort(faces.begin(), faces.end());
-  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  std::sort(faces.begin(), faces.end());  // the strip's triangles in mesh order, as always
   double edge_sum = 0;
   for (auto f : faces) {
     const auto& t = pm.triangles[f];
     std::array<std::uint32_t, 3> corners{};
     bool inside = true;
     for (int k = 0; k < 3 && inside; ++k) {
-      auto it = local.find(t[k]);
-      if (it == local.end()) inside = false; else corners[k] = it->second;
+      inside = local.contains(t[k]);
+      if (inside) corners[k] = local.at(t[k]);
     }
     if (!inside) continue;
     strip.triangles.push_back(corners);
@@ -156,16 +160,15 @@ FeatureStrip extract_feature_strip(const PreparedMesh& pm, const std::vector<std
                                                    : edge_sum / (3.0 * double(strip.triangles.size()));
 
   // Triangle adjacency inside the strip, for walking point location: the mesh's face table
-  // (built once in prepare_mesh) restricted to the strip. strip.faces is sorted, so a face's
-  // local index is found by binary search.
+  // (built once in prepare_mesh) restricted to the strip.
+  local_face.begin(pm.triangles.size());
+  for (std::uint32_t t = 0; t < strip.faces.size(); ++t) local_face.set(strip.faces[t], t);
   strip.triangle_neighbors.assign(strip.triangles.size(), {-1, -1, -1});
   for (std::uint32_t t = 0; t < strip.triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) {
       // The edge opposite corner k is edge (k + 1) of the face in the mesh table's numbering.
       const auto across = pm.face_neighbors[strip.faces[t]][(k + 1) % 3];
-      if (across == kNoIndex) continue;
-      const auto it = std::lower_bound(strip.faces.begin(), strip.faces.end(), across);
-      if (it != strip.faces.end() && *it == across) strip.triangle_neighbors[t][k] = std::int32_t(it - strip.faces.begin());
+      if (across != kNoIndex && local_face.contains(across)) strip.triangle_neighbors[t][k] = std::int32_t(local_face.at(across));
     }
   return strip;
 }

@@ -64,6 +64,9 @@ void check_strip_options(const StripOptions& options);
 struct FeatureStrip {
   std::vector<std::uint32_t> vertices;                   ///< mesh vertex id of each local vertex
   std::vector<int> ring;                                 ///< topological distance of each local vertex to the line
+  /// Index in `line` of the line vertex each local vertex was first reached from (its own for
+  /// the line's vertices): where along the line it lies.
+  std::vector<std::uint32_t> line_position;
   std::vector<std::array<std::uint32_t, 3>> triangles;   ///< local indices, the mesh's orientation
   std::vector<std::uint32_t> faces;                      ///< mesh face id of each local triangle
   /// Neighbouring local triangle across the edge opposite corner k, or -1 at the strip's border.

@@ -9,6 +9,7 @@
 #include "engine/errors.h"
 #include "engine/internal/edge_search.h"
 #include "engine/internal/geometry.h"
+#include "engine/internal/vertex_map.h"
 
 namespace featureline {
 namespace {
@@ -200,7 +201,12 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
                                       : 0.5 * (feature_strength(mesh, v, feature_sign) + feature_strength(mesh, w, feature_sign));
     return mesh.neighbor_edge_lengths[k] * (floor + (1 - floor) * (1 - strength));
   };
-  auto enterable = [blocked](std::uint32_t w) { return !is_blocked(blocked, w); };
+  // Blocked vertices as stamps: a lookup per edge the search relaxes, not a binary search.
+  StampedMap& walls = stamped_map(2);
+  walls.begin(mesh.n_vertices());
+  if (blocked != nullptr)
+    for (auto v : *blocked) walls.set(v, 1);
+  auto enterable = [&walls](std::uint32_t w) { return !walls.contains(w); };
   auto path = cheapest_path_between(mesh, from, to, edge_cost, enterable, floor, max_cost, cancel);
   if (path.empty()) return std::nullopt;
   return path;

@@ -17,7 +17,7 @@ void zero_gradient_across_sharp_crests(const FeatureStrip& strip, const FlatStri
                                        double drop, std::vector<Eigen::Vector2d>& gradient) {
   if (!(drop > 0) || drop >= 1) return;
   const std::size_t nv = strip.vertices.size();
-  // Tangent of the line at each line vertex, then at every strip vertex from the nearest line vertex.
+  // Tangent of the line at each line vertex, then at every strip vertex from its line vertex.
   std::vector<Eigen::Vector2d> line_tangent(strip.line.size());
   for (std::size_t i = 0; i < strip.line.size(); ++i) {
     const auto a = strip.line[i == 0 ? 0 : i - 1], b = strip.line[std::min(i + 1, strip.line.size() - 1)];
@@ -25,15 +25,12 @@ void zero_gradient_across_sharp_crests(const FeatureStrip& strip, const FlatStri
   }
   std::vector<double> highest_left(nv, -1), highest_right(nv, -1);
   std::vector<Eigen::Vector2d> normal(nv, Eigen::Vector2d::Zero());
+  // Each vertex takes the normal of the line vertex the strip reached it from (a vertex's nearest
+  // line vertex by rings; a search over the whole line per vertex cost more than the force).
   for (std::size_t v = 0; v < nv; ++v) {
     if (!flat.placed[v]) continue;
-    std::size_t nearest = 0;
-    double best = HUGE_VAL;
-    for (std::size_t i = 0; i < strip.line.size(); ++i) {
-      const double d = (flat.uv[strip.line[i]] - flat.uv[v]).squaredNorm();
-      if (d < best) best = d, nearest = i;
-    }
-    normal[v] = Eigen::Vector2d(-line_tangent[nearest].y(), line_tangent[nearest].x());
+    const auto& tangent = line_tangent[strip.line_position[v]];
+    normal[v] = Eigen::Vector2d(-tangent.y(), tangent.x());
   }
   // Highest potential among the neighbours on each side of the line (through triangle edges).
   for (std::size_t t = 0; t < strip.triangles.size(); ++t) {
