@@ -192,7 +192,9 @@ void resample(const SnakeRun& run, std::vector<StripPoint>& points, double dampi
 struct SnakeSystem {
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> solver;
   Eigen::SparseMatrix<double> A, M;
-  std::vector<Eigen::Triplet<double>> triplets;
+  /// A's block over the interior points: M's pattern, entry for entry (normal step).
+  Eigen::SparseMatrix<double> A_interior;
+  std::vector<double> diagonal;  ///< 1 + tau K_ii per interior point (normal step)
   std::size_t factored_size = 0;
   Eigen::VectorXd x, y, rhs_x, rhs_y;  ///< positions v_k in units, right-hand sides
   std::vector<Eigen::Vector2d> normal;
@@ -201,7 +203,14 @@ struct SnakeSystem {
 // Loads v_k (in units) and rebuilds A when the number of points changed.
 void load_positions(const SnakeRun& run, const std::vector<StripPoint>& points, SnakeSystem& sys) {
   const std::size_t n = points.size();
-  if (Eigen::Index(n) != sys.A.rows()) sys.A = stiffness(n, run.o.alpha, run.o.beta);
+  if (Eigen::Index(n) != sys.A.rows()) {
+    sys.A = stiffness(n, run.o.alpha, run.o.beta);
+    if (n > 2) {
+      const auto m = Eigen::Index(n - 2);
+      sys.A_interior = sys.A.block(1, 1, m, m);
+      sys.M = sys.A_interior;
+    }
+  }
   sys.x.resize(Eigen::Index(n));
   sys.y.resize(Eigen::Index(n));
   for (std::size_t i = 0; i < n; ++i)
@@ -229,7 +238,7 @@ void assemble_normal_system(const SnakeRun& run, const std::vector<StripPoint>& 
   const std::size_t n = points.size(), m = n - 2;
   const Eigen::VectorXd ax = sys.A * sys.x, ay = sys.A * sys.y;
   sys.rhs_x.resize(Eigen::Index(m));
-  sys.triplets.clear();
+  sys.diagonal.resize(m);
   for (std::size_t i = 1; i + 1 < n; ++i) {
     const Eigen::Vector2d residual =
         o.kappa * force_at(run.force, run.strip, points[i]) - Eigen::Vector2d(ax[Eigen::Index(i)], ay[Eigen::Index(i)]);
@@ -237,16 +246,20 @@ void assemble_normal_system(const SnakeRun& run, const std::vector<StripPoint>& 
     double stiffness_i = 0;
     if (!run.force.jacobian.empty())
       stiffness_i = std::max(0.0, -o.kappa * sys.normal[i].dot(run.force.jacobian[points[i].triangle] * sys.normal[i]));
-    sys.triplets.emplace_back(i - 1, i - 1, 1.0 + o.tau * stiffness_i);
+    sys.diagonal[i - 1] = 1.0 + o.tau * stiffness_i;
   }
-  for (Eigen::Index k = 0; k < sys.A.outerSize(); ++k)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(sys.A, k); it; ++it) {
-      const auto r = std::size_t(it.row()), c = std::size_t(it.col());
-      if (r == 0 || c == 0 || r + 1 == n || c + 1 == n) continue;
-      sys.triplets.emplace_back(r - 1, c - 1, o.tau * it.value() * sys.normal[r].dot(sys.normal[c]));
+  // M has A_interior's pattern (load_positions made it so when the point count changed): its
+  // values are written in place, entry for entry, instead of assembled and sorted every iteration.
+  const double* a = sys.A_interior.valuePtr();
+  double* values = sys.M.valuePtr();
+  const auto* outer = sys.M.outerIndexPtr();
+  const auto* inner = sys.M.innerIndexPtr();
+  for (Eigen::Index c = 0; c < Eigen::Index(m); ++c)
+    for (auto j = outer[c]; j < outer[c + 1]; ++j) {
+      const auto r = inner[j];
+      const double coupling = o.tau * a[j] * sys.normal[std::size_t(r) + 1].dot(sys.normal[std::size_t(c) + 1]);
+      values[j] = r == c ? sys.diagonal[std::size_t(r)] + coupling : coupling;
     }
-  sys.M.resize(Eigen::Index(m), Eigen::Index(m));
-  sys.M.setFromTriplets(sys.triplets.begin(), sys.triplets.end());
 }
 
 // One normal step: each interior point's target, its solved move along its normal, damped and
