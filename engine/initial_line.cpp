@@ -186,9 +186,12 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
   const double floor = feature_weighted ? std::clamp(options.feature_weight_floor, 1e-6, 1.0) : 1.0;
   // The cheapest possible cost per unit length is `floor`: the bound that keeps the search
   // between the two keys.
+  std::uint32_t strength_of = kNoIndex;  // the vertex whose strength `strength_v` holds
+  double strength_v = 0;
   auto edge_cost = [&](std::uint32_t v, std::uint32_t k) {
     if (!feature_weighted) return mesh.neighbor_edge_lengths[k];
     const auto w = mesh.neighbors[k];
+    if (strength_of != v) strength_of = v, strength_v = feature_strength(mesh, v, feature_sign);
     // A crease edge of the line's kind is a feature whatever its ends' curvature says
     // (on skinny CAD triangles the vertex fields are unreliable, a dihedral angle is not).
     const auto crease = mesh.curvature.crease[k];
@@ -198,7 +201,7 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
     const bool chord = !on_crease && mesh.curvature.on_crease[v] && mesh.curvature.on_crease[w];
     const double strength = on_crease ? 1.0
                             : chord   ? 0.0
-                                      : 0.5 * (feature_strength(mesh, v, feature_sign) + feature_strength(mesh, w, feature_sign));
+                                      : 0.5 * (strength_v + feature_strength(mesh, w, feature_sign));
     return mesh.neighbor_edge_lengths[k] * (floor + (1 - floor) * (1 - strength));
   };
   // Blocked vertices as stamps: a lookup per edge the search relaxes, not a binary search.
