@@ -193,7 +193,13 @@ bool refine_piece_with_snake(const LineRun& run, PieceWork& work, std::deque<Pie
   const FeatureStrip strip = extract_feature_strip(run.pm, work.sub, run.options.strip);
   result.timings.strip_ms += ms_since(t0);
   t0 = Clock::now();
-  const FlatStrip flat = flatten_strip(run.pm, strip, run.options.strip);
+  // A featureless strip's snake only smooths the line: the paper's layout serves it as well as
+  // the conformal solve, which cost such lines (keys off any feature) most of their flattening.
+  StripOptions layout = run.options.strip;
+  if (layout.flattening == StripFlattening::automatic &&
+      strip_feature_strength(run.pm, strip, run.snake) < run.snake.featureless_below)
+    layout.flattening = StripFlattening::similar_triangles;
+  const FlatStrip flat = flatten_strip(run.pm, strip, layout);
   result.timings.flatten_ms += ms_since(t0);
   if (split_where_folded(run, work.piece, flat, pieces)) {
     ++result.splits;

@@ -398,23 +398,18 @@ void iterate_snake(const SnakeRun& run, SnakeResult& result, const Cancellation*
   }
 }
 
-// The 90th percentile, over the strip's placed vertices, of the feature strength the force
-// follows: |C| of the line's sign in curvature-scale units (the mesh's own 90th percentile of
-// |C|), capped as the force caps it.
-double strip_feature_strength(const PreparedMesh& pm, const FeatureStrip& strip, const FlatStrip& flat, const SnakeOptions& o) {
+}  // namespace
+
+double strip_feature_strength(const PreparedMesh& pm, const FeatureStrip& strip, const SnakeOptions& o) {
   std::vector<double> strength;
   strength.reserve(strip.vertices.size());
-  for (std::size_t v = 0; v < strip.vertices.size(); ++v)
-    if (flat.placed[v])
-      strength.push_back(std::min(feature_value(pm.curvature, strip.vertices[v], o.feature_sign) / pm.curvature_scale,
-                                  o.curvature_cap));
+  for (auto v : strip.vertices)
+    strength.push_back(std::min(feature_value(pm.curvature, v, o.feature_sign) / pm.curvature_scale, o.curvature_cap));
   if (strength.empty()) return 0;
   const auto at = strength.begin() + std::ptrdiff_t(0.9 * double(strength.size() - 1));
   std::nth_element(strength.begin(), at, strength.end());
   return *at;
 }
-
-}  // namespace
 
 void check_snake_options(const SnakeOptions& o) {
   using S = SnakeOptions;
@@ -447,7 +442,7 @@ SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip,
   const ForceField force = build_force_field(pm, strip, flat, o, unit);
   const double h = o.spacing * unit;
   result.points = initial_snake(strip, flat, vertex_starts(strip, flat), h);
-  result.strip_strength = strip_feature_strength(pm, strip, flat, o);
+  result.strip_strength = strip_feature_strength(pm, strip, o);
   SnakeOptions settle = o;
   if (result.strip_strength < o.featureless_below) {
     // Nothing here is more of a feature than the mesh's own surface is (on a scan, its noise):

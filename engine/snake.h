@@ -120,6 +120,11 @@ struct SnakeResult {
   bool featureless = false;   ///< below featureless_below: the snake only smoothed the line
 };
 
+/// The 90th percentile over the strip's vertices of the feature strength the force follows:
+/// |C| of the line's sign in curvature-scale units (the mesh's own 90th percentile of |C|),
+/// capped as the force caps it. Below SnakeOptions::featureless_below the strip is featureless.
+double strip_feature_strength(const PreparedMesh& mesh, const FeatureStrip& strip, const SnakeOptions& options);
+
 /// Refines the strip's line; both ends of the line stay pinned. The line's points never
 /// leave the strip: a point pushed past the strip's border stops on it.
 /// \throw CancelledError once `cancel` is requested (checked every iteration).
