@@ -9,7 +9,6 @@
 #include "engine/errors.h"
 #include "engine/internal/edge_search.h"
 #include "engine/internal/geometry.h"
-#include "engine/internal/vertex_map.h"
 
 namespace featureline {
 namespace {
@@ -204,13 +203,7 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
                                       : 0.5 * (strength_v + feature_strength(mesh, w, feature_sign));
     return mesh.neighbor_edge_lengths[k] * (floor + (1 - floor) * (1 - strength));
   };
-  // Blocked vertices as stamps: a lookup per edge the search relaxes, not a binary search.
-  StampedMap& walls = stamped_map(2);
-  walls.begin(mesh.n_vertices());
-  if (blocked != nullptr)
-    for (auto v : *blocked) walls.set(v, 1);
-  auto enterable = [&walls](std::uint32_t w) { return !walls.contains(w); };
-  auto path = cheapest_path_between(mesh, from, to, edge_cost, enterable, floor, max_cost, cancel);
+  auto path = cheapest_path_between(mesh, from, to, edge_cost, blocked, floor, max_cost, cancel);
   if (path.empty()) return std::nullopt;
   return path;
 }

@@ -116,13 +116,14 @@ std::vector<std::uint32_t> cheapest_edge_path(const PreparedMesh& mesh, std::uin
 /// is long; the two halves flood two discs half as wide.
 ///  - `edge_cost(v, k)`: cost of the edge between v and mesh.neighbors[k], the same both ways;
 ///    negative to skip it;
-///  - `enterable(w)`: whether a path may pass through w (its two ends always may);
+///  - `blocked`: vertices no path may pass through (its two ends always may), or nullptr; they
+///    are marked settled on both sides before the search, so they cost nothing per edge;
 ///  - `slope`: no edge costs less than `slope` times its length.
 /// Settles vertices in (key, id) order on the side with the smaller key, so ties resolve the same
 /// way on every run. Checks `cancel` every 4096 settled vertices.
-template <class EdgeCost, class Enterable>
+template <class EdgeCost>
 std::vector<std::uint32_t> cheapest_path_between(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
-                                                 EdgeCost&& edge_cost, Enterable&& enterable, double slope,
+                                                 EdgeCost&& edge_cost, const std::vector<std::uint32_t>* blocked, double slope,
                                                  double max_cost, const Cancellation* cancel = nullptr) {
   if (from == to) return {from};
   const auto& P = mesh.positions;
@@ -137,6 +138,9 @@ std::vector<std::uint32_t> cheapest_path_between(const PreparedMesh& mesh, std::
   const double direction[2] = {1, -1};
   for (int d = 0; d < 2; ++d) {
     side[d]->begin(mesh.n_vertices());
+    if (blocked != nullptr)
+      for (auto v : *blocked)
+        if (v != from && v != to) side[d]->close(v);
     side[d]->label(start[d], 0, start[d]);
     open[d].emplace(direction[d] * potential(start[d]), start[d]);
   }
@@ -155,7 +159,7 @@ std::vector<std::uint32_t> cheapest_path_between(const PreparedMesh& mesh, std::
     if ((++settled & 4095) == 0) throw_if_cancelled(cancel);
     for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) {
       const auto w = mesh.neighbors[k];
-      if (s.closed(w) || !(w == from || w == to || enterable(w))) continue;
+      if (s.closed(w)) continue;
       const double step = edge_cost(v, k);
       if (step < 0) continue;
       const double cost = s.cost(v) + step;
@@ -179,8 +183,8 @@ std::vector<std::uint32_t> cheapest_path_between(const PreparedMesh& mesh, std::
 inline std::vector<std::uint32_t> shortest_path_between(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
                                                         double max_length) {
   return cheapest_path_between(
-      mesh, from, to, [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths[k]; },
-      [](std::uint32_t) { return true; }, 1.0, max_length);
+      mesh, from, to, [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths[k]; }, nullptr, 1.0,
+      max_length);
 }
 
 /// The shortest path by edge length from `from` to the first vertex `is_goal` accepts, no

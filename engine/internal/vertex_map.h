@@ -1,7 +1,7 @@
 // Internal to the engine: a map from mesh element ids (vertices, faces) to 32-bit values whose
-// reset costs O(1), for stages that touch a small part of a large mesh per request (a strip
-// around a line, the vertices a path may not cross). A hash map cost the strip extraction most
-// of its time; this is one 8-byte slot per element, valid only when its stamp is the current one.
+// reset costs O(1), for stages that touch a small part of a large mesh per request (the strip
+// around a line). A hash map cost the strip extraction most of its time; this is one 8-byte
+// slot per element, valid only when its stamp is the current one.
 #pragma once
 
 #include <algorithm>
@@ -30,10 +30,10 @@ class StampedMap {
   std::uint32_t generation_ = 0;
 };
 
-/// This thread's map number `which` (0: the strip's vertices, 1: the strip's faces, 2: vertices a
-/// path may not enter). Each is used by one stage at a time.
+/// This thread's map number `which` (0: the strip's vertices, 1: the strip's faces). Each is
+/// used by one stage at a time.
 inline StampedMap& stamped_map(int which) {
-  thread_local StampedMap maps[3];
+  thread_local StampedMap maps[2];
   return maps[which];
 }
 
