@@ -280,58 +280,57 @@ bool place_conformally(const PreparedMesh& pm, const FeatureStrip& strip, FlatSt
   for (std::size_t i = 0; i < strip.line.size(); ++i) flat.uv[strip.line[i]] = line_uv[i];
   const auto position = [&](std::uint32_t v) { return pm.positions[strip.vertices[v]]; };
 
-  // Unknowns: u of vertex i at 2i, v at 2i + 1. Each triangle gives two rows r (the
-  // residual's real and imaginary parts), pinned corners moving to the right-hand side b; the
-  // normal equations sum r r^T and r b straight away (no rectangular matrix to multiply).
-  std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(component.size() * 72);
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(Eigen::Index(2 * count));
+  // Unknowns: w = u + iv of each free vertex, one complex number. A triangle's residual is
+  // sum_k c_k w_k with c_k = W_k / sqrt(area); its pinned corners go to the right-hand side b.
+  // The normal equations C^H C w = C^H b are Hermitian: summed straight away, entry by entry (no
+  // rectangular matrix to multiply), and half the size of the real system of u and v, whose
+  // ordering and factorisation cost most of the flattening of large strips.
+  using Complex = std::complex<double>;
+  std::vector<Eigen::Triplet<Complex>> entries;
+  entries.reserve(component.size() * 9);
+  Eigen::VectorXcd rhs = Eigen::VectorXcd::Zero(Eigen::Index(count));
   bool any_row = false;
   for (auto t : component) {
     const auto& tri = strip.triangles[t];
     const Eigen::Vector3d e1 = position(tri[1]) - position(tri[0]), e2 = position(tri[2]) - position(tri[0]);
     const double len1 = e1.norm(), twice_area = e1.cross(e2).norm();
     if (!(len1 > 0) || !(twice_area > 1e-12 * len1 * len1)) continue;
-    const std::complex<double> z[3] = {{0, 0}, {len1, 0}, {e2.dot(e1) / len1, twice_area / len1}};
+    const Complex z[3] = {{0, 0}, {len1, 0}, {e2.dot(e1) / len1, twice_area / len1}};
     const double weight = 1 / std::sqrt(0.5 * twice_area);
-    const std::complex<double> W[3] = {z[1] - z[2], z[2] - z[0], z[0] - z[1]};
-    // The two rows over this triangle's free unknowns, and their right-hand sides.
-    std::array<std::int64_t, 6> col{};
-    std::array<double, 6> row_re{}, row_im{};
+    const Complex W[3] = {z[1] - z[2], z[2] - z[0], z[0] - z[1]};
+    // The row over this triangle's free unknowns, and its right-hand side.
+    std::array<std::int64_t, 3> col{};
+    std::array<Complex, 3> row{};
     int free = 0;
-    double b_re = 0, b_im = 0;
+    Complex b = 0;
     for (int k = 0; k < 3; ++k) {
-      const double a = weight * W[k].real(), b = weight * W[k].imag();
+      const Complex c = weight * W[k];
       const auto v = tri[std::size_t(k)];
       if (unknown[v] == kPinned) {
-        const Eigen::Vector2d w = flat.uv[v];
-        b_re -= a * w.x() - b * w.y();
-        b_im -= b * w.x() + a * w.y();
+        b -= c * Complex(flat.uv[v].x(), flat.uv[v].y());
         continue;
       }
-      col[std::size_t(free)] = 2 * unknown[v], row_re[std::size_t(free)] = a, row_im[std::size_t(free)] = b;
-      col[std::size_t(free) + 1] = 2 * unknown[v] + 1, row_re[std::size_t(free) + 1] = -b, row_im[std::size_t(free) + 1] = a;
-      free += 2;
+      col[std::size_t(free)] = unknown[v], row[std::size_t(free)] = c;
+      ++free;
     }
     any_row = true;
     for (std::size_t i = 0; i < std::size_t(free); ++i) {
-      rhs[col[i]] += row_re[i] * b_re + row_im[i] * b_im;
-      for (std::size_t j = 0; j < std::size_t(free); ++j)
-        entries.emplace_back(col[i], col[j], row_re[i] * row_re[j] + row_im[i] * row_im[j]);
+      rhs[col[i]] += std::conj(row[i]) * b;
+      for (std::size_t j = 0; j < std::size_t(free); ++j) entries.emplace_back(col[i], col[j], std::conj(row[i]) * row[j]);
     }
   }
   if (!any_row) return false;
   for (auto v : strip.line) flat.placed[v] = 1;
   if (count == 0) return true;
-  Eigen::SparseMatrix<double> normal(Eigen::Index(2 * count), Eigen::Index(2 * count));
+  Eigen::SparseMatrix<Complex> normal{Eigen::Index(count), Eigen::Index(count)};
   normal.setFromTriplets(entries.begin(), entries.end());
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<Complex>> solver(normal);
   if (solver.info() != Eigen::Success) return false;
-  const Eigen::VectorXd x = solver.solve(rhs);
+  const Eigen::VectorXcd x = solver.solve(rhs);
   if (solver.info() != Eigen::Success || !x.allFinite()) return false;
   for (std::size_t v = 0; v < n; ++v) {
     if (unknown[v] < 0) continue;
-    flat.uv[v] = Eigen::Vector2d(x[2 * unknown[v]], x[2 * unknown[v] + 1]);
+    flat.uv[v] = Eigen::Vector2d(x[unknown[v]].real(), x[unknown[v]].imag());
     flat.placed[v] = 1;
   }
   return true;
