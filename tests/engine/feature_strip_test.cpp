@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 
 #include "engine/feature_strip.h"
 #include "engine/initial_line.h"
@@ -27,6 +28,23 @@ TEST(FeatureStrip, RingsAndAdjacencyAreConsistent) {
     for (int r : strip.ring) EXPECT_LE(r, rings);
     ASSERT_EQ(strip.line.size(), line.vertices.size());
     for (std::size_t i = 0; i < strip.line.size(); ++i) EXPECT_EQ(strip.vertices[strip.line[i]], line.vertices[i]);
+    // Each line vertex is its own line position; every other vertex shares its position with a
+    // neighbour one ring nearer the line (the vertex the strip reached it from).
+    ASSERT_EQ(strip.line_position.size(), strip.vertices.size());
+    for (std::size_t i = 0; i < strip.line.size(); ++i) EXPECT_EQ(strip.line_position[strip.line[i]], i);
+    std::map<std::uint32_t, std::size_t> local;
+    for (std::size_t v = 0; v < strip.vertices.size(); ++v) local[strip.vertices[v]] = v;
+    for (std::size_t v = 0; v < strip.vertices.size(); ++v) {
+      if (strip.ring[v] == 0) continue;
+      bool reached = false;
+      const auto mesh_v = strip.vertices[v];
+      for (auto k = mesh->neighbor_offsets[mesh_v]; k < mesh->neighbor_offsets[mesh_v + 1]; ++k) {
+        const auto it = local.find(mesh->neighbors[k]);
+        reached |= it != local.end() && strip.ring[it->second] == strip.ring[v] - 1 &&
+                   strip.line_position[it->second] == strip.line_position[v];
+      }
+      EXPECT_TRUE(reached) << "strip vertex " << v;
+    }
     for (std::size_t t = 0; t < strip.triangles.size(); ++t)
       for (int k = 0; k < 3; ++k) {
         const auto n = strip.triangle_neighbors[t][k];
