@@ -95,6 +95,10 @@ mutant "cluster.sh's --http-threads changed" "compose replicas' --http-threads i
   scripts/cluster.sh 's/--http-threads 256/--http-threads 512/'
 mutant "kubernetes replicas without --http-threads" "kubernetes replicas' --http-threads" $K \
   "a = $fl_pod['containers'][0]['args']; i = a.index('--http-threads'); del a[i:i + 2]"
+mutant "kubernetes replicas without --threads" "kubernetes: --threads is the pod's CPU request" $K \
+  "a = $fl_pod['containers'][0]['args']; i = a.index('--threads'); del a[i:i + 2]"
+mutant "--threads from the memory request" "kubernetes: --threads is the pod's CPU request" $K \
+  "e = $fl_pod['containers'][0]['env']; next(x for x in e if x['name'] == 'FEATURELINE_CPU_REQUEST')['valueFrom']['resourceFieldRef']['resource'] = 'requests.memory'"
 mutant "memory limit 1536Mi for a 1024 MiB cache" "kubernetes: memory limit >= 2 x --cache-mb" $K \
   "$fl_pod['containers'][0]['resources']['limits']['memory'] = '1536Mi'"
 mutant "a larger --cache-mb under the same limit" "kubernetes: memory limit >= 2 x --cache-mb (1536)" $K \

@@ -236,6 +236,15 @@ check("kubernetes replicas use the Redis store", "redis://redis:6379" in args)
 for name, want in cluster_flags.items():
     check("kubernetes replicas' %s is scripts/cluster.sh's (%s)" % (name, want), flag(args, name) == want, flag(args, name))
 
+# Engine threads follow the CPU request: the variable --threads names comes from the Downward API.
+threads = flag(args, "--threads") or ""
+threads_var = re.fullmatch(r'\$\((\w+)\)', threads)
+cpu_field = next((e.get("valueFrom", {}).get("resourceFieldRef", {}) for e in c.get("env", [])
+                  if threads_var and e.get("name") == threads_var.group(1)), {})
+check("kubernetes: --threads is the pod's CPU request (%s)" % threads,
+      cpu_field.get("resource") == "requests.cpu" and cpu_field.get("containerName") == c.get("name") and
+      str(cpu_field.get("divisor", "1")) == "1" and c.get("resources", {}).get("requests", {}).get("cpu") is not None)
+
 cache_mb = int(flag(args, "--cache-mb") or cache_default)
 res = c.get("resources", {})
 limit, request = res.get("limits", {}).get("memory"), res.get("requests", {}).get("memory")
