@@ -177,33 +177,38 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
   }
 }
 
+FeaturePathCost::FeaturePathCost(const PreparedMesh& mesh, const InitialLineOptions& options, double feature_sign)
+    : mesh_(mesh), floor_(std::clamp(options.feature_weight_floor, 1e-6, 1.0)), sign_(feature_sign) {}
+
+double FeaturePathCost::operator()(std::uint32_t v, std::uint32_t k) {
+  const auto w = mesh_.neighbors[k];
+  if (strength_of_ != v) strength_of_ = v, strength_v_ = feature_strength(mesh_, v, sign_);
+  // A crease edge of the line's kind is a feature whatever its ends' curvature says
+  // (on skinny CAD triangles the vertex fields are unreliable, a dihedral angle is not).
+  const auto crease = mesh_.curvature.crease[k];
+  const bool on_crease = crease != 0 && (sign_ == 0 || crease == sign_);
+  // An edge joining two crease vertices without being a crease is a chord across a
+  // face (a CAD cap's long diagonal cutting a rounded corner): no feature at all.
+  const bool chord = !on_crease && mesh_.curvature.on_crease[v] && mesh_.curvature.on_crease[w];
+  const double strength = on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v_ + feature_strength(mesh_, w, sign_));
+  return mesh_.neighbor_edge_lengths[k] * (floor_ + (1 - floor_) * (1 - strength));
+}
+
 std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
                                                              bool feature_weighted, const InitialLineOptions& options,
                                                              double feature_sign,
                                                              const std::vector<std::uint32_t>* blocked,
                                                              const Cancellation* cancel, double max_cost) {
-  const double floor = feature_weighted ? std::clamp(options.feature_weight_floor, 1e-6, 1.0) : 1.0;
-  // The cheapest possible cost per unit length is `floor`: the bound that keeps the search
+  // The cheapest possible cost per unit length (the floor) is the bound that keeps the search
   // between the two keys.
-  std::uint32_t strength_of = kNoIndex;  // the vertex whose strength `strength_v` holds
-  double strength_v = 0;
-  auto edge_cost = [&](std::uint32_t v, std::uint32_t k) {
-    if (!feature_weighted) return mesh.neighbor_edge_lengths[k];
-    const auto w = mesh.neighbors[k];
-    if (strength_of != v) strength_of = v, strength_v = feature_strength(mesh, v, feature_sign);
-    // A crease edge of the line's kind is a feature whatever its ends' curvature says
-    // (on skinny CAD triangles the vertex fields are unreliable, a dihedral angle is not).
-    const auto crease = mesh.curvature.crease[k];
-    const bool on_crease = crease != 0 && (feature_sign == 0 || crease == feature_sign);
-    // An edge joining two crease vertices without being a crease is a chord across a
-    // face (a CAD cap's long diagonal cutting a rounded corner): no feature at all.
-    const bool chord = !on_crease && mesh.curvature.on_crease[v] && mesh.curvature.on_crease[w];
-    const double strength = on_crease ? 1.0
-                            : chord   ? 0.0
-                                      : 0.5 * (strength_v + feature_strength(mesh, w, feature_sign));
-    return mesh.neighbor_edge_lengths[k] * (floor + (1 - floor) * (1 - strength));
-  };
-  auto path = cheapest_path_between(mesh, from, to, edge_cost, blocked, floor, max_cost, cancel);
+  std::vector<std::uint32_t> path;
+  if (feature_weighted) {
+    FeaturePathCost cost(mesh, options, feature_sign);
+    path = cheapest_path_between(mesh, from, to, cost, blocked, cost.floor(), max_cost, cancel);
+  } else {
+    const auto length = [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths[k]; };
+    path = cheapest_path_between(mesh, from, to, length, blocked, 1.0, max_cost, cancel);
+  }
   if (path.empty()) return std::nullopt;
   return path;
 }

@@ -93,7 +93,24 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
                                                           const std::vector<std::uint32_t>* blocked = nullptr,
                                                           const Cancellation* cancel = nullptr);
 
-/// Minimal edge path from `from` to `to` (A*): `feature_weighted` selects the feature_path cost,
+/// The feature path's cost of the edge from v to mesh.neighbors[k]: its length times
+/// floor + (1 - floor)(1 - strength), strength the mean feature strength of its ends, 1 on a
+/// crease of the line's sign, 0 on a chord between crease vertices. Never below floor times the
+/// length. Not thread-safe (it remembers the last v's strength).
+class FeaturePathCost {
+ public:
+  FeaturePathCost(const PreparedMesh& mesh, const InitialLineOptions& options, double feature_sign);
+  double operator()(std::uint32_t v, std::uint32_t k);
+  double floor() const { return floor_; }
+
+ private:
+  const PreparedMesh& mesh_;
+  double floor_, sign_;
+  std::uint32_t strength_of_ = UINT32_MAX;  // the vertex whose strength strength_v_ holds
+  double strength_v_ = 0;
+};
+
+/// Minimal edge path from `from` to `to` (A* from both ends): `feature_weighted` selects the feature_path cost,
 /// otherwise plain length. Vertices in `blocked` (sorted ids) are avoided, ends excepted. Paths
 /// costing more than `max_cost` are not searched (std::nullopt), which keeps a search for a
 /// nearby vertex local when blocked vertices wall it off.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <random>
 
 #include "engine/initial_line.h"
@@ -75,6 +76,29 @@ TEST(EdgeSearch, BothEndsFindThePlainSearchesPathOnScans) {
 TEST(EdgeSearch, BothEndsFindThePlainSearchesPathOnANoisyRidge) {
   const auto field = make_ridge_field(61, 0.2, 7, 0.3, 0.25, 0.3);
   expect_same_paths(*prepare_mesh(field.mesh), "ridge field");
+}
+
+// The feature path itself (shortest_edge_path: its cost, creases and chords included, searched
+// from both ends) against plain Dijkstra on the same cost, for each sign a line can have, on
+// scans, a CAD part with creases and a noisy ridge.
+TEST(EdgeSearch, TheFeaturePathIsThePlainSearchesOnEveryTestMesh) {
+  std::vector<std::pair<std::string, std::shared_ptr<const PreparedMesh>>> meshes;
+  for (const char* file : {"bunny_closed.off", "armadillo_29k.obj", "fandisk.off"}) {
+    const std::string path = require_shared_mesh(file);
+    if (!path.empty()) meshes.emplace_back(file, prepare_mesh(read_mesh_file(path)));
+  }
+  meshes.emplace_back("ridge field", prepare_mesh(make_ridge_field(61, 0.2, 7, 0.3, 0.25, 0.3).mesh));
+  const InitialLineOptions options;
+  for (const auto& [name, mesh] : meshes)
+    for (double sign : {0.0, 1.0, -1.0})
+      for (const auto& [a, b] : random_pairs(*mesh, 6)) {
+        FeaturePathCost cost(*mesh, options, sign);
+        const auto plain = cheapest_edge_path(
+            *mesh, a, [b = b](std::uint32_t v) { return v == b; }, cost, [](std::uint32_t) { return 0.0; }, HUGE_VAL);
+        const auto found = shortest_edge_path(*mesh, a, b, true, options, sign);
+        ASSERT_TRUE(found.has_value()) << name;
+        EXPECT_EQ(*found, plain) << name << ", sign " << sign << ": " << a << " -> " << b;
+      }
 }
 
 TEST(EdgeSearch, BlockedVerticesAreAvoidedExceptAtTheEnds) {
