@@ -18,36 +18,41 @@ namespace featureline {
 
 /// Per-thread search scratch whose reset is O(1): an entry is valid only when its stamp equals
 /// the current generation. Keeps each query's cost proportional to what it visits, not to the
-/// mesh size. One record per vertex, so a visit touches one cache line, not four arrays.
+/// mesh size. The stamps (with the settled bit) are an array of their own, 4 bytes a vertex:
+/// the test every relaxed edge makes first (is its far end settled?) reads that array alone.
 struct SearchScratch {
-  struct Node {
+  struct Label {
     double cost;
     std::uint32_t parent;
-    std::uint32_t stamp;         ///< == generation: cost and parent are this query's
-    std::uint32_t closed_stamp;  ///< == generation: settled in this query
   };
-  std::vector<Node> nodes;
+  std::vector<std::uint32_t> state;  ///< generation << 1 | settled
+  std::vector<Label> labels;
   std::uint32_t generation = 0;
 
   /// Starts a new query over n vertices.
   void begin(std::size_t n) {
-    if (nodes.size() < n) {
-      nodes.assign(n, Node{0, 0, 0, 0});
+    if (state.size() < n) {
+      state.assign(n, 0);
+      labels.assign(n, Label{0, 0});
       generation = 0;
     }
-    if (++generation == 0) {  // wrapped: clear once every 4 billion queries
-      for (auto& node : nodes) node.stamp = node.closed_stamp = 0;
+    if (++generation == (1u << 31)) {  // wrapped: clear once every 2 billion queries
+      std::fill(state.begin(), state.end(), 0);
       generation = 1;
     }
   }
-  bool seen(std::uint32_t v) const { return nodes[v].stamp == generation; }
-  bool closed(std::uint32_t v) const { return nodes[v].closed_stamp == generation; }
-  void mark_seen(std::uint32_t v) { nodes[v].stamp = generation; }
-  void close(std::uint32_t v) { nodes[v].closed_stamp = generation; }
-  double cost(std::uint32_t v) const { return nodes[v].cost; }
-  std::uint32_t parent(std::uint32_t v) const { return nodes[v].parent; }
-  /// Labels v with (cost, parent) for this query.
-  void label(std::uint32_t v, double cost, std::uint32_t parent) { nodes[v] = Node{cost, parent, generation, nodes[v].closed_stamp}; }
+  bool seen(std::uint32_t v) const { return (state[v] >> 1) == generation; }
+  bool closed(std::uint32_t v) const { return state[v] == (generation << 1 | 1); }
+  void mark_seen(std::uint32_t v) { state[v] = generation << 1; }
+  /// Settles v (a settled vertex counts as seen).
+  void close(std::uint32_t v) { state[v] = generation << 1 | 1; }
+  double cost(std::uint32_t v) const { return labels[v].cost; }
+  std::uint32_t parent(std::uint32_t v) const { return labels[v].parent; }
+  /// Labels v with (cost, parent) for this query; v must not be settled.
+  void label(std::uint32_t v, double cost, std::uint32_t parent) {
+    labels[v] = Label{cost, parent};
+    state[v] = generation << 1;
+  }
 };
 
 /// This thread's scratch (one per thread: the server runs searches on several threads at once).
