@@ -128,6 +128,20 @@ inline double feature_strength(const PreparedMesh& mesh, std::uint32_t v, double
   return s > 1 ? 1 : s;
 }
 
+inline double FeaturePathCost::operator()(std::uint32_t v, std::uint32_t k) {
+  const auto w = mesh_.neighbors[k];
+  if (strength_of_ != v) strength_of_ = v, strength_v_ = feature_strength(mesh_, v, sign_);
+  // A crease edge of the line's kind is a feature whatever its ends' curvature says
+  // (on skinny CAD triangles the vertex fields are unreliable, a dihedral angle is not).
+  const auto crease = mesh_.curvature.crease[k];
+  const bool on_crease = crease != 0 && (sign_ == 0 || crease == sign_);
+  // An edge joining two crease vertices without being a crease is a chord across a
+  // face (a CAD cap's long diagonal cutting a rounded corner): no feature at all.
+  const bool chord = !on_crease && mesh_.curvature.on_crease[v] && mesh_.curvature.on_crease[w];
+  const double strength = on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v_ + feature_strength(mesh_, w, sign_));
+  return mesh_.neighbor_edge_lengths[k] * (floor_ + (1 - floor_) * (1 - strength));
+}
+
 /// +1 when every key sits on a ridge (H above 5% of the curvature scale), -1 when every key sits
 /// in a valley, 0 otherwise or when `options.sign_aware` is off.
 double keys_feature_sign(const PreparedMesh& mesh, const std::vector<std::uint32_t>& keys, const InitialLineOptions& options);
