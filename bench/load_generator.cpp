@@ -25,24 +25,28 @@ double percentile(std::vector<double> v, double q) {
   return v[std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5))];
 }
 
-std::vector<std::string> feature_line_bodies(const PreparedMesh& mesh, std::size_t count, std::uint64_t seed) {
+namespace {
+
+// `count` bodies {"keys": [...]} from `pick`, seeded.
+template <class Pick>
+std::vector<std::string> line_bodies(std::size_t count, std::uint64_t seed, Pick pick) {
   std::mt19937_64 rng(seed);
   std::vector<std::string> bodies;
   while (bodies.size() < count) {
-    const auto keys = pick_feature_keys(mesh, rng);
+    const auto keys = pick(rng);
     if (!keys.empty()) bodies.push_back(nlohmann::json{{"keys", keys}}.dump());
   }
   return bodies;
 }
 
+}  // namespace
+
+std::vector<std::string> feature_line_bodies(const PreparedMesh& mesh, std::size_t count, std::uint64_t seed) {
+  return line_bodies(count, seed, [&mesh](std::mt19937_64& rng) { return pick_feature_keys(mesh, rng); });
+}
+
 std::vector<std::string> random_line_bodies(const PreparedMesh& mesh, std::size_t count, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::vector<std::string> bodies;
-  while (bodies.size() < count) {
-    const auto keys = pick_random_keys(mesh, rng);
-    if (!keys.empty()) bodies.push_back(nlohmann::json{{"keys", keys}}.dump());
-  }
-  return bodies;
+  return line_bodies(count, seed, [&mesh](std::mt19937_64& rng) { return pick_random_keys(mesh, rng); });
 }
 
 namespace {

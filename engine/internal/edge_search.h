@@ -62,6 +62,19 @@ inline SearchScratch& search_scratch(int which = 0) {
   return s[which];
 }
 
+/// The cost of reaching w = mesh.neighbors[k] from the settled vertex v, when that improves w's
+/// label within max_cost; -1 otherwise (w settled, the edge skipped, NaN costs).
+template <class EdgeCost>
+double improved_cost(const SearchScratch& s, std::uint32_t v, std::uint32_t k, std::uint32_t w, EdgeCost& edge_cost,
+                     double max_cost) {
+  if (s.closed(w)) return -1;
+  const double step = edge_cost(v, k);
+  if (!(step >= 0)) return -1;
+  const double cost = s.cost(v) + step;
+  if (!(cost <= max_cost) || (s.seen(w) && !(cost < s.cost(w)))) return -1;
+  return cost;
+}
+
 /// The cheapest path over mesh edges from `from` to the first vertex `is_goal(v)` accepts, both
 /// ends included; empty when no goal is reachable within `max_cost`.
 ///  - `edge_cost(v, k)`: cost of the edge from v to mesh.neighbors[k], or negative to skip it;
@@ -94,15 +107,10 @@ std::vector<std::uint32_t> cheapest_edge_path(const PreparedMesh& mesh, std::uin
     }
     for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) {
       const auto w = mesh.neighbors[k];
-      if (s.closed(w)) continue;
-      const double step = edge_cost(v, k);
-      if (step < 0) continue;
-      const double cost = s.cost(v) + step;
-      if (cost > max_cost) continue;
-      if (!s.seen(w) || cost < s.cost(w)) {
-        s.label(w, cost, v);
-        open.emplace(cost + heuristic(w), w);
-      }
+      const double cost = improved_cost(s, v, k, w, edge_cost, max_cost);
+      if (cost < 0) continue;
+      s.label(w, cost, v);
+      open.emplace(cost + heuristic(w), w);
     }
   }
   std::vector<std::uint32_t> path;
@@ -164,11 +172,8 @@ std::vector<std::uint32_t> cheapest_path_between(const PreparedMesh& mesh, std::
     if ((++settled & 4095) == 0) throw_if_cancelled(cancel);
     for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) {
       const auto w = mesh.neighbors[k];
-      if (s.closed(w)) continue;
-      const double step = edge_cost(v, k);
-      if (step < 0) continue;
-      const double cost = s.cost(v) + step;
-      if (!(cost <= max_cost) || (s.seen(w) && !(cost < s.cost(w)))) continue;  // NaN costs too
+      const double cost = improved_cost(s, v, k, w, edge_cost, max_cost);
+      if (cost < 0) continue;
       s.label(w, cost, v);
       open[d].emplace(cost + direction[d] * potential(w), w);
       if (other.seen(w) && cost + other.cost(w) < best && cost + other.cost(w) <= max_cost)
