@@ -53,6 +53,12 @@ constexpr std::size_t kMaxJsonBytes = RequestLimits::max_json_bytes;
 constexpr std::size_t kUploadChunkBytes = std::size_t(1) << 20;
 // A .gltf and its .bin files rarely number more than a few; every part costs a string.
 constexpr std::size_t kMaxUploadFiles = 64;
+// The front (deploy/nginx.conf.template) names what it asks of a replica in this header:
+// "hand-off" on an upload (store it and hand it back), "uploaded" when it sends that upload on
+// to the replica its id belongs to. The front sets or clears it on every request it forwards.
+constexpr const char* kFrontHeader = "X-Featureline-Front";
+// Where the front takes a handed-off upload back (an internal location of the front's).
+constexpr const char* kHandedOffPrefix = "/_featureline/uploaded/";
 
 // The time routing started on this worker thread (set in the pre-routing handler), for the
 // access log and the latency metrics.
@@ -186,6 +192,7 @@ struct FeaturelineServer::Impl {
   StoreBreaker* breaker = nullptr;  // in front of the upload store (owned by sessions); null without one
   DurableSessions sessions;         // the cache in front of the upload store (if any)
   Metrics metrics;
+  std::atomic<std::uint64_t> uploads_handed_off{0};
   const Clock::time_point started = Clock::now();
   std::mutex log_mutex;
   // Background expiry of idle sessions, so their memory goes even when nobody asks.
@@ -439,6 +446,7 @@ struct FeaturelineServer::Impl {
       }
     });
     http.Get(mesh, guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
+      if (req.get_header_value(kFrontHeader) == "uploaded") return prepare_handed_off(req.matches[1], res);
       write_json(res, 200, describe(*session_or_404(req.matches[1])));
     }));
     http.Delete(mesh, guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
@@ -495,6 +503,10 @@ struct FeaturelineServer::Impl {
           {"featureline_cache_inserts_total", {"Meshes uploaded and prepared.", double(s.inserts)}},
           {"featureline_store_rebuilds_total", {"Sessions prepared again from the upload store after a cache miss.",
                                                 double(sessions.rebuilds())}},
+          {"featureline_uploads_handed_off_total", {"Uploads stored and handed back to the front for the replica their id belongs to.",
+                                                    double(uploads_handed_off.load())}},
+          {"featureline_uploads_taken_over_total", {"Uploads handed off by another replica and prepared here.",
+                                                    double(sessions.handoffs())}},
           {"featureline_store_bytes", {"Upload bytes held by a directory store.",
                                        double(sessions.store() ? sessions.store()->bytes() : 0)}},
           {"featureline_store_breaker_open", {"1 while the upload store's circuit breaker is open (operations fail at once).",
@@ -711,6 +723,7 @@ struct FeaturelineServer::Impl {
                       "could not tell the mesh format from its bytes; pass ?format=obj|off|ply|stl|glb|gltf|drc");
     upload->format = *format;
     upload->uploaded_at_unix_s = std::int64_t(std::time(nullptr));
+    if (hand_off_requested(req)) return hand_off(*upload, res);
 
     MeshSession session = run_on_pool([this, upload = std::shared_ptr<const StoredUpload>(upload), limits = read_limits](
                                           const Cancellation* cancel) {
@@ -724,6 +737,50 @@ struct FeaturelineServer::Impl {
                           std::to_string(options.cache_mb) + " MiB");
     res.set_header("Location", "/v1/meshes/" + (*stored)->id);
     write_json(res, 201, describe(**stored));
+  }
+
+  // Behind the front, an upload is stored here under a fresh id and handed back to the front,
+  // which sends it on to the replica that id hashes to: the mesh is prepared once, where its
+  // lines will be asked for, instead of here and again there. Only with a shared store (the
+  // owner reads the upload from it); a replica without one prepares the upload itself.
+  bool hand_off_requested(const httplib::Request& req) const {
+    return req.get_header_value(kFrontHeader) == "hand-off" && sessions.store() != nullptr && sessions.store()->shared();
+  }
+
+  void hand_off(const StoredUpload& upload, httplib::Response& res) {
+    const std::string id = sessions.stash(upload);
+    ++uploads_handed_off;
+    res.status = 200;
+    res.set_header("X-Accel-Redirect", kHandedOffPrefix + id);
+  }
+
+  // The owner's half of a handed-off upload: prepared from the store and answered as the upload
+  // (201 and its description). An upload that cannot be prepared is removed from the store, and
+  // the error is the one a direct upload gets.
+  void prepare_handed_off(const std::string& id, httplib::Response& res) {
+    DurableSessions::Found found;
+    try {
+      found = sessions.find_stashed(id);
+    } catch (const CacheTooSmallError& e) {
+      discard_handed_off(id);
+      throw HttpError(413, "payload_too_large", "the mesh cannot be prepared within this server's memory: " + e.reason());
+    } catch (...) {
+      discard_handed_off(id);
+      throw;
+    }
+    if (!found.session)
+      throw StoreUnavailableError("the upload store lost the upload " + quote_client_text(id) + " before it was prepared; upload it again");
+    res.set_header("Location", "/v1/meshes/" + found.session->id);
+    write_json(res, 201, describe(*found.session));
+  }
+
+  void discard_handed_off(const std::string& id) {
+    try {
+      DurableSessions::Gone why;
+      sessions.erase(id, &why);
+    } catch (...) {
+      log_line("a handed-off upload that could not be prepared could not be removed from the store; it expires unused");
+    }
   }
 
   void curvature(const httplib::Request& req, httplib::Response& res) {

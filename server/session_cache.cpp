@@ -177,7 +177,12 @@ DurableSessions::Gone DurableSessions::drop_unstored(const std::shared_ptr<const
   return why_gone(session->id, miss);
 }
 
-DurableSessions::Found DurableSessions::find(const std::string& id) {
+DurableSessions::Found DurableSessions::find(const std::string& id) { return find(id, rebuilds_); }
+
+DurableSessions::Found DurableSessions::find_stashed(const std::string& id) { return find(id, handoffs_); }
+
+// `counter` counts the preparation, if this lookup prepares the session.
+DurableSessions::Found DurableSessions::find(const std::string& id, std::atomic<std::size_t>& counter) {
   Found found;
   SessionCache::Miss miss = SessionCache::Miss::unknown;
   found.session = cache_.find(id, &miss);
@@ -194,13 +199,13 @@ DurableSessions::Found DurableSessions::find(const std::string& id) {
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (auto it = too_large_.find(id); it != too_large_.end()) throw CacheTooSmallError(it->second);
+    if (auto it = too_large_.find(id); it != too_large_.end()) throw it->second;
   }
-  return rebuild_once(id);
+  return rebuild_once(id, counter);
 }
 
 // Single flight: the first request for a missing id rebuilds it; the others wait for its result.
-DurableSessions::Found DurableSessions::rebuild_once(const std::string& id) {
+DurableSessions::Found DurableSessions::rebuild_once(const std::string& id, std::atomic<std::size_t>& counter) {
   std::promise<Found> promise;
   std::shared_future<Found> flight;
   bool leader = false;
@@ -216,7 +221,7 @@ DurableSessions::Found DurableSessions::rebuild_once(const std::string& id) {
   }
   if (leader) {
     try {
-      promise.set_value(load_from_store(id));
+      promise.set_value(load_from_store(id, counter));
     } catch (...) {
       promise.set_exception(std::current_exception());
     }
@@ -226,7 +231,7 @@ DurableSessions::Found DurableSessions::rebuild_once(const std::string& id) {
   return flight.get();  // rethrows the leader's exception
 }
 
-DurableSessions::Found DurableSessions::load_from_store(const std::string& id) {
+DurableSessions::Found DurableSessions::load_from_store(const std::string& id, std::atomic<std::size_t>& counter) {
   Found found;
   // A flight that ended between this request's cache miss and now may have cached it already.
   if ((found.session = cache_.find(id))) return found;
@@ -239,14 +244,14 @@ DurableSessions::Found DurableSessions::load_from_store(const std::string& id) {
   try {
     session = rebuild_(std::make_shared<const StoredUpload>(std::move(*lookup.upload)));
   } catch (const LimitExceededError& e) {
-    throw too_large(id, std::string(": ") + e.what());
+    throw too_large(id, e.what());
   }
   session.id = id;
   session.store_losses = store_->losses().count;
   const std::size_t bytes = session.bytes;
   auto cached = cache_.insert(std::move(session));
-  if (!cached) throw too_large(id, " needs " + std::to_string(bytes >> 20) + " MiB prepared");
-  ++rebuilds_;
+  if (!cached) throw too_large(id, "it needs " + std::to_string(bytes >> 20) + " MiB prepared");
+  ++counter;
   found.session = *cached;
   found.rebuilt = true;
   still_stored(id);  // restarts the store's idle clock
@@ -255,11 +260,12 @@ DurableSessions::Found DurableSessions::load_from_store(const std::string& id) {
 
 // Remembers that `id` cannot fit (until it is deleted), so later requests are refused at once.
 CacheTooSmallError DurableSessions::too_large(const std::string& id, const std::string& why) {
-  CacheTooSmallError error("mesh " + id + " is stored but cannot be prepared within this server's memory" + why +
-                           "; a server with a larger --cache-mb can serve it");
+  CacheTooSmallError error("mesh " + id + " is stored but cannot be prepared within this server's memory: " + why +
+                               "; a server with a larger --cache-mb can serve it",
+                           why);
   std::lock_guard<std::mutex> lock(mutex_);
   if (too_large_.size() > 10000) too_large_.clear();  // bounded: forgetting only costs one more attempt
-  too_large_[id] = error.what();
+  too_large_.insert_or_assign(id, error);
   return error;
 }
 
@@ -300,6 +306,15 @@ std::optional<std::shared_ptr<const MeshSession>> DurableSessions::create(MeshSe
   std::lock_guard<std::mutex> lock(mutex_);
   touched_[id] = SessionCache::Clock::now();
   return cached;
+}
+
+std::string DurableSessions::stash(const StoredUpload& upload) {
+  if (!store_) throw std::logic_error("stash needs an upload store");
+  const std::string id = random_session_id();
+  store_->put(id, upload);
+  std::lock_guard<std::mutex> lock(mutex_);
+  touched_[id] = SessionCache::Clock::now();
+  return id;
 }
 
 bool DurableSessions::erase(const std::string& id, Gone* why) {

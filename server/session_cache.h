@@ -107,7 +107,13 @@ class SessionCache {
 /// a smaller --cache-mb, or another replica with a larger one took the upload).
 class CacheTooSmallError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  CacheTooSmallError(const std::string& message, std::string reason)
+      : std::runtime_error(message), reason_(std::move(reason)) {}
+  /// Why it cannot be prepared here: the limit's own message, or the memory it needs.
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string reason_;
 };
 
 class DurableSessions {
@@ -140,10 +146,19 @@ class DurableSessions {
   /// what Rebuild throws (every waiter on the same rebuild gets the same exception)
   Found find(const std::string& id);
 
+  /// The session of an upload stash()ed by another replica: find, counted as the upload's
+  /// preparation (handoffs()) rather than as a rebuild.
+  Found find_stashed(const std::string& id);
+
   /// A new upload's session: stored first, then cached under a fresh id. std::nullopt when the
   /// prepared mesh exceeds the cache's whole budget (nothing is stored then).
   /// 	hrow StoreFullError, StoreUnavailableError (nothing is kept then)
   std::optional<std::shared_ptr<const MeshSession>> create(MeshSession session, const StoredUpload& upload);
+
+  /// A new upload stored under a fresh id without preparing it here: the replica that id belongs
+  /// to prepares it when it is first asked for (find). Needs a store; returns the id.
+  /// \throw StoreFullError, StoreUnavailableError
+  std::string stash(const StoredUpload& upload);
 
   /// Removes the session from the store, then the cache; false (and why) when neither had it.
   /// \throw StoreUnavailableError (the session is kept whole, cached copy included)
@@ -156,12 +171,15 @@ class DurableSessions {
   bool durable() const { return store_ != nullptr; }
   const UploadStore* store() const { return store_.get(); }
   std::size_t rebuilds() const { return rebuilds_.load(); }
+  /// Stashed uploads prepared here (find_stashed).
+  std::size_t handoffs() const { return handoffs_.load(); }
   /// The store's data losses found so far (none without a store).
   StoreLosses store_losses() const { return store_ ? store_->losses() : StoreLosses{}; }
 
  private:
-  Found rebuild_once(const std::string& id);
-  Found load_from_store(const std::string& id);
+  Found rebuild_once(const std::string& id, std::atomic<std::size_t>& counter);
+  Found load_from_store(const std::string& id, std::atomic<std::size_t>& counter);
+  Found find(const std::string& id, std::atomic<std::size_t>& counter);
   Gone why_gone(const std::string& id, StoreMiss store_miss);
   Gone drop_unstored(const std::shared_ptr<const MeshSession>& session);
   bool still_stored(const std::string& id);
@@ -172,10 +190,11 @@ class DurableSessions {
   Rebuild rebuild_;
   Options options_;
   std::atomic<std::size_t> rebuilds_{0};
+  std::atomic<std::size_t> handoffs_{0};
   std::mutex mutex_;  // guards flights_ and touched_
   std::unordered_map<std::string, std::shared_future<Found>> flights_;  // rebuilds in progress
   std::unordered_map<std::string, SessionCache::Clock::time_point> touched_;
-  std::unordered_map<std::string, std::string> too_large_;  // ids whose rebuild cannot fit: the message
+  std::unordered_map<std::string, CacheTooSmallError> too_large_;  // ids whose rebuild cannot fit
 };
 
 }  // namespace featureline::server

@@ -160,6 +160,9 @@ start_server memonly --quiet || exit 1
 readyz memonly "$T/rz_mem.json"
 expect "readyz without a store" 200 - GET /readyz "$T/rz_mem.json"
 check_eq "... names no store" "$(jq -c '[.status, .store]' "$T/rz_mem.json")" '["ready",null]'
+http "$T/plain.json" -H 'X-Featureline-Front: hand-off' -H 'Content-Type: application/octet-stream' --data-binary @samples/ridge_field.off "${SRV_BASE[memonly]}/v1/meshes"
+check_eq "a hand-off asked of a replica without a shared store: it prepares the upload itself (201)" \
+  "$STATUS/$(header "$T/plain.json" X-Accel-Redirect)/$(metric memonly featureline_uploads_handed_off_total)" "201//0"
 stop_server memonly
 
 start_redis "$T/redis-a" || exit 1
@@ -177,6 +180,35 @@ wait "${BG_PIDS[@]}" 2>/dev/null
 check_eq "6 concurrent uploads: 201 each" "$(cat "$T"/par?.code | tr -d '\n')" "201201201201201201"
 KEPT=$(jq -r .mesh_id "$T/par1.json")
 line rs "$KEPT" '[701, 963, 1184]'; KEPT_LINE=$LINE
+
+# Behind the front (deploy/nginx.conf.template): an upload asked to be handed off is stored, not
+# prepared, and handed back; the replica the front sends it on to prepares it and answers as an
+# upload. A mesh that cannot be prepared is removed from the store with the usual error.
+handoff() {  # handoff FILE: sets HANDED (the id in the X-Accel-Redirect) and STATUS
+  http "$T/ho.json" --data-binary @"$1" -H 'Content-Type: application/octet-stream' -H 'X-Featureline-Front: hand-off' \
+    "${SRV_BASE[rs]}/v1/meshes"
+  HANDED=$(header "$T/ho.json" X-Accel-Redirect | sed -n 's|^/_featureline/uploaded/\([0-9a-f]\{32\}\)$|\1|p')
+}
+inserts=$(metric rs featureline_cache_inserts_total)
+handoff samples/ridge_field.off
+check_eq "a hand-off: 200, empty, X-Accel-Redirect to /_featureline/uploaded/ID" "$STATUS/$(wc -c <"$T/ho.json")/${#HANDED}" "200/0/32"
+check_eq "... stored in Redis, not prepared" "$(redis-cli -p "$REDIS_PORT" --raw exists "featureline:upload:$HANDED")/$(metric rs featureline_cache_inserts_total)" "1/$inserts"
+http "$T/taken.json" -H 'X-Featureline-Front: uploaded' "${SRV_BASE[rs]}/v1/meshes/$HANDED"
+expect "the owner's half of the hand-off" 201 - POST /v1/meshes "$T/taken.json"
+check_eq "... the upload's answer: its id, Location, the mesh's counts" \
+  "$(jq -r '[.mesh_id, .vertices] | @tsv' "$T/taken.json") $(header "$T/taken.json" Location)" \
+  "$HANDED	$(jq -r .vertices "$T/par1.json") /v1/meshes/$HANDED"
+check_eq "... prepared once, counted as taken over (not a rebuild)" \
+  "$(metric rs featureline_cache_inserts_total)/$(metric rs featureline_uploads_handed_off_total)/$(metric rs featureline_uploads_taken_over_total)" \
+  "$((inserts + 1))/1/1"
+line rs "$HANDED" '[701, 963, 1184]'
+check_eq "a line on it: the same line as on a direct upload of the mesh" "$STATUS/$LINE" "200/$KEPT_LINE"
+printf 'OFF\n3 1 0\n0 0 0\n1 0 0\n' >"$T/broken.off"
+handoff "$T/broken.off"
+check_eq "a malformed mesh is handed off too (its head and format pass)" "$STATUS/${#HANDED}" "200/32"
+http "$T/taken2.json" -H 'X-Featureline-Front: uploaded' "${SRV_BASE[rs]}/v1/meshes/$HANDED"
+expect "its owner cannot prepare it" 400 malformed_mesh POST /v1/meshes "$T/taken2.json"
+check_eq "... and removes it from Redis" "$(redis-cli -p "$REDIS_PORT" --raw exists "featureline:upload:$HANDED")" 0
 
 # Restarted with its data (append-only file): the pooled connections are dead, nothing may fail.
 stop_redis; start_redis "$T/redis-a" || exit 1

@@ -617,6 +617,34 @@ TEST(DurableSessions, ARestartCostsARebuildNotTheSession) {
   EXPECT_FALSE(sessions.find(id).rebuilt);  // cached again
 }
 
+TEST(DurableSessions, AStashedUploadIsPreparedOnceWhereItIsFirstFoundAndCountedAsTakenOver) {
+  TempFolder dir;
+  Rebuilds rebuilds;
+  SessionCache cache({1 << 20, std::chrono::seconds(60)});
+  DurableSessions sessions(cache, open_directory_store(dir.path, {}), rebuilds.fn(), {});
+  const std::string id = sessions.stash(upload_of("stashed"));
+  EXPECT_EQ(id.size(), 32u);
+  EXPECT_EQ(cache.stats().entries, 0u);  // stored, not prepared
+  EXPECT_EQ(rebuilds.count, 0);
+  EXPECT_TRUE(open_directory_store(dir.path, {})->get(id).upload.has_value());
+  const auto found = sessions.find_stashed(id);
+  ASSERT_NE(found.session, nullptr);
+  EXPECT_TRUE(found.rebuilt);
+  EXPECT_EQ(found.session->id, id);
+  EXPECT_EQ(rebuilds.count, 1);
+  EXPECT_EQ(sessions.handoffs(), 1u);
+  EXPECT_EQ(sessions.rebuilds(), 0u);
+  EXPECT_FALSE(sessions.find(id).rebuilt);  // cached where it was prepared
+  EXPECT_EQ(rebuilds.count, 1);
+}
+
+TEST(DurableSessions, StashNeedsAStore) {
+  SessionCache cache({1 << 20, std::chrono::seconds(60)});
+  Rebuilds rebuilds;
+  DurableSessions sessions(cache, nullptr, rebuilds.fn(), {});
+  EXPECT_THROW(sessions.stash(upload_of("x")), std::logic_error);
+}
+
 TEST(DurableSessions, ManyWaitersOnAMissingSessionShareOneRebuild) {
   TempFolder dir;
   Rebuilds rebuilds;
