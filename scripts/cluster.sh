@@ -7,7 +7,7 @@
 #   scripts/cluster.sh down   --port P [--wipe] [--state-dir D]
 #
 # Ports: Redis on P+1, replica I (1..N) on P+1+I (each checked free before it starts).
-# State (pid files, logs, the rendered nginx.conf, Redis' append-only file) lives in
+# State (pid files, logs, the rendered nginx.conf, Redis' append-only file and password) lives in
 # D = ${XDG_STATE_HOME:-~/.local/state}/featureline/cluster-P; Redis' data persists across
 # down/up unless --wipe. `up` starts only what is not running (it also restarts a dead replica)
 # and stops replicas beyond --replicas that an earlier `up` started. A port held by another
@@ -108,7 +108,17 @@ wait_until() {
   return 1
 }
 http_ok() { curl -s -o /dev/null --max-time 2 -f "http://127.0.0.1:$1/healthz"; }
-redis_ok() { redis-cli -h 127.0.0.1 -p "$redis_port" ping 2>/dev/null | grep -q PONG; }
+# Redis wants a password (on a shared machine any local user can reach a loopback port): made
+# once, kept in the state folder readable by this user only, given to Redis on its standard
+# input and to the replicas and redis-cli in their environment, never on a command line.
+redis_password_file() { echo "$state/redis-password"; }
+ensure_redis_password() {
+  local file; file=$(redis_password_file)
+  [ -s "$file" ] && return 0
+  (umask 077; head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' >"$file.part" && mv "$file.part" "$file")
+}
+redis_password() { cat "$(redis_password_file)"; }
+redis_ok() { REDISCLI_AUTH=$(redis_password) redis-cli -h 127.0.0.1 -p "$redis_port" ping 2>/dev/null | grep -q PONG; }
 
 # stop_pid NAME PID: TERM, up to 10 s, then KILL; waits until the process is gone.
 stop_pid() {
@@ -126,8 +136,10 @@ start_redis() {
   [ -n "$(pid_of redis redis-server)" ] && return 0
   port_free "$redis_port" || die "port $redis_port (Redis) is taken by $(port_holder "$redis_port")"
   mkdir -p "$state/redis"
-  "$redis_bin" "$root/deploy/redis.conf" --port "$redis_port" --bind 127.0.0.1 --dir "$state/redis" \
-    --daemonize yes --pidfile "$state/pids/redis.pid" --logfile "$state/logs/redis.log"
+  ensure_redis_password
+  printf 'requirepass "%s"\n' "$(redis_password)" |
+    "$redis_bin" "$root/deploy/redis.conf" --port "$redis_port" --bind 127.0.0.1 --protected-mode yes --dir "$state/redis" \
+      --daemonize yes --pidfile "$state/pids/redis.pid" --logfile "$state/logs/redis.log" -
   wait_until 10 redis_ok || die "Redis did not answer on port $redis_port (see $state/logs/redis.log)"
 }
 
@@ -139,7 +151,7 @@ start_replica() {
   # setsid: the replica outlives this script and its terminal; its pid is recorded for down.
   # nginx holds the clients and opens a connection per request in flight: each replica takes up
   # to 512 of them (256 workers) and still refuses engine work beyond its queue with 503.
-  setsid "$server_bin" --host 127.0.0.1 --port "$p" --store "redis://127.0.0.1:$redis_port" \
+  FEATURELINE_REDIS_PASSWORD=$(redis_password) setsid "$server_bin" --host 127.0.0.1 --port "$p" --store "redis://127.0.0.1:$redis_port" \
     --max-upload-mb "$max_upload_mb" --http-threads 256 "${server_flags[@]}" \
     </dev/null >"$state/logs/replica-$i.out" 2>>"$state/logs/replica-$i.log" &
   echo $! >"$state/pids/replica-$i.pid"
@@ -213,7 +225,7 @@ up() {
   command -v "$redis_bin" >/dev/null || die "no redis-server at $redis_bin (scripts/setup.sh installs it)"
   if [ "$wipe" = 1 ]; then
     [ -z "$(pid_of redis redis-server)" ] || die "--wipe needs the cluster down first"
-    rm -rf "$state/redis"
+    rm -rf "$state/redis" "$(redis_password_file)"
   fi
   mkdir -p "$state/pids" "$state/logs"
   local i surplus; surplus=$(started_replicas)
@@ -247,7 +259,7 @@ down() {
   pid=$(pid_of redis redis-server); [ -n "$pid" ] && stop_pid redis "$pid"
   rm -rf "$state/pids"
   [ "$(id -u)" = 0 ] && rm -rf "$(nginx_temp)"
-  [ "$wipe" = 1 ] && rm -rf "$state/redis"
+  [ "$wipe" = 1 ] && rm -rf "$state/redis" "$(redis_password_file)"
   # Done only when nothing answers on the front port any more.
   port_free "$port" || die "down: port $port is still held by $(port_holder "$port"), not a process this cluster recorded"
   echo "cluster: down (port $port)$([ "$wipe" = 1 ] && echo ", Redis data wiped")"

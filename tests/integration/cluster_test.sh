@@ -72,6 +72,14 @@ check "nginx -t accepts the rendered deploy/nginx.conf.template" grep -q "test i
 check "nginx routes meshes by consistent hashing on the id" grep -q 'hash $mesh_id consistent' "$STATE/nginx.conf"
 http "$T/page.html" "$FRONT/"
 check_eq "the page is served through nginx" "$STATUS" 200
+# Redis wants the password the script made (in the state folder, this user's only) and no
+# process shows it on its command line.
+check_eq "Redis refuses a client without the password" \
+  "$(redis-cli -p $((CLUSTER_PORT + 1)) ping 2>&1 | grep -o NOAUTH)" NOAUTH
+check_eq "... and answers with it" "$(REDISCLI_AUTH=$(cat "$STATE/redis-password") redis-cli -p $((CLUSTER_PORT + 1)) ping)" PONG
+check_eq "the password file: 64 hex digits, mode 600" "$(grep -cE '^[0-9a-f]{64}$' "$STATE/redis-password")/$(stat -c %a "$STATE/redis-password")" 1/600
+check "no process has the password on its command line" \
+  bash -c "! grep -qaFf '$STATE/redis-password' /proc/[0-9]*/cmdline 2>/dev/null"
 
 # ---- uploads and lines through nginx ---------------------------------------------------------------
 declare -a IDS=() KEYS=() LINES=() REPLICA=() UPLOADER=()
