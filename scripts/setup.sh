@@ -12,13 +12,12 @@ packages=(g++ cmake ninja-build pkg-config git ca-certificates
 # What only the tests use (scripts/test.sh sets FEATURELINE_TEST_TOOLS=1): the browser, the
 # cluster's nginx and Redis, the deployment files' YAML check, ss for free ports, what CPack
 # reads the .deb's dependencies with (dpkg-shlibdeps, file), the independent readers the
-# export formats are read back with (meshio, Open3D, VTK). With FEATURELINE_IMAGE_TESTS=1 also
-# what the images are built and run with (podman; debootstrap for their base when no registry
-# has debian:12).
+# export formats are read back with (meshio, Open3D, VTK), what the images are built and run
+# with (podman; debootstrap for their base when no registry has debian:12).
 if [ "${FEATURELINE_TEST_TOOLS:-0}" = 1 ]; then
-  packages+=(chromium nginx redis-server python3-yaml iproute2 dpkg-dev file python3-meshio python3-open3d python3-vtk9)
+  packages+=(chromium nginx redis-server python3-yaml iproute2 dpkg-dev file python3-meshio python3-open3d python3-vtk9
+    podman debootstrap)
 fi
-if [ "${FEATURELINE_IMAGE_TESTS:-0}" = 1 ]; then packages+=(podman debootstrap); fi
 # The fuzz build (scripts/test.sh, scripts/fuzz.sh) compiles with clang and links libFuzzer.
 case " $* " in *clang*) packages+=(clang libclang-rt-14-dev) ;; esac
 missing=()

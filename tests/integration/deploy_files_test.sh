@@ -252,19 +252,31 @@ fi
 D=docker/Dockerfile.server
 check_eq "the image is multi-stage (2 FROM)" "$(grep -c '^FROM ' "$D")" 2
 check "the image runs as a non-root user" grep -qE '^USER [1-9][0-9]*$' "$D"
-# The packages a RUN line installs, for stage N (1 = build, 2 = runtime).
+# The packages a RUN line installs, for stage N (1 = build, 2 = runtime) of Dockerfile F (default $D).
 stage_packages() {
-  awk -v want="$1" '/^FROM / { stage++ } stage == want' "$D" | tr '\n\\' '  ' | grep -oE 'apt-get install [^&]*' |
+  awk -v want="$1" '/^FROM / { stage++ } stage == want' "${2:-$D}" | tr '\n\\' '  ' | grep -oE 'apt-get install [^&]*' |
     tr ' ' '\n' | grep -E '^[a-z0-9][a-z0-9.+-]+$' | grep -vxE 'apt-get|install' | sort -u
+}
+# The packages owning the shared libraries PROGRAM links, but those every Debian image has.
+linked_packages() {
+  # (A sanitizer build also links the sanitizers' runtimes: not part of the image.)
+  for l in $(ldd "$1" | awk '/=> \// && $1 !~ /^lib(a|ub|t|l)san/ { print $3 }'); do dpkg -S "$(readlink -f "$l")" 2>/dev/null || dpkg -S "$l"; done |
+    cut -d: -f1 | sort -u | grep -vE '^(libc6|libgcc-s1|libstdc\+\+6|libssl3|libbrotli1|libstb0)$'
 }
 setup_packages=$(sed -n '/^packages=(/,/)/p' scripts/setup.sh | tr -d '()' | sed 's/packages=//' | tr ' ' '\n' | grep -v '^$' | sort -u)
 missing=$(comm -23 <(stage_packages 1 | grep -vE '^(nodejs|npm)$') <(echo "$setup_packages"))
 check_eq "the build stage installs only packages scripts/setup.sh installs" "$missing" ""
 check "the build stage installs libhiredis-dev" grep -qx libhiredis-dev <(stage_packages 1)
-# (A sanitizer build also links the sanitizers' runtimes: not part of the image.)
-needed=$(for l in $(ldd "$SERVER" | awk '/=> \// && $1 !~ /^lib(a|ub|t|l)san/ { print $3 }'); do dpkg -S "$(readlink -f "$l")" 2>/dev/null || dpkg -S "$l"; done |
-  cut -d: -f1 | sort -u | grep -vE '^(libc6|libgcc-s1|libstdc\+\+6|libssl3|libbrotli1|libstb0)$')
 runtime=$(stage_packages 2)
-check_eq "the runtime stage installs the package of every library the server links" "$(comm -23 <(echo "$needed") <(echo "$runtime"))" ""
+check_eq "the runtime stage installs the package of every library the server links" \
+  "$(comm -23 <(linked_packages "$SERVER") <(echo "$runtime"))" ""
+
+# ---- the CLI image: the server image's build stage, line for line (one build serves both)
+build_stage() { awk '/^FROM / { stage++ } stage == 1' "$1"; }
+check_eq "docker/Dockerfile's build stage is docker/Dockerfile.server's" "$(diff <(build_stage "$D") <(build_stage docker/Dockerfile) && echo same)" same
+check "... and it builds both programs" grep -q -- '--target featureline-server featureline ' "$D"
+check_eq "the CLI image is multi-stage (2 FROM)" "$(grep -c '^FROM ' docker/Dockerfile)" 2
+check_eq "the CLI runtime stage installs the package of every library the CLI links" \
+  "$(comm -23 <(linked_packages "${FEATURELINE:-$ROOT/build/cli/featureline}") <(stage_packages 2 docker/Dockerfile))" ""
 
 finish
