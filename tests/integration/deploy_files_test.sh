@@ -2,7 +2,8 @@
 # What can be checked of docker/ and deploy/ without a Docker engine: the nginx
 # template renders and passes `nginx -t` as the compose file renders it, and so does the
 # Kubernetes front's nginx.conf (the ConfigMap's text, its upstream names resolved in a private
-# /etc/hosts); the compose file and the Kubernetes manifests parse and describe the topology
+# /etc/hosts), which also routes and fails over as it should (front_failover.sh: as root, 3 of 6
+# ordinals present, one replica SIGKILLed); the compose file and the Kubernetes manifests parse and describe the topology
 # (replicas on the Redis store, liveness and startup on /healthz, readiness on /readyz, nginx
 # hashing on the mesh id with its edge limits) and meet what deploy_yaml_check.py asks of them
 # (scripts/cluster.sh's --http-threads, memory from --cache-mb, preStop and grace period,
@@ -85,6 +86,23 @@ check "nginx -t accepts the Kubernetes front's nginx.conf (the ConfigMap's text)
 out=$(front_nginx_t /etc/hosts)
 check "... and refuses it where the Services' names do not resolve (so they were resolved)" \
   grep -q 'host not found in upstream "featureline-0:8080"' <<<"$out"
+# ... and run: routing and failover with stand-in replicas for 3 of the 6 ordinals, one SIGKILLed
+# (front_failover.sh, in a network namespace of its own: needs root).
+if [ "$(id -u)" = 0 ]; then
+  timeout 120 unshare --net --mount --propagation private bash "$HERE/front_failover.sh" "$TMP/front.conf" \
+    >"$TMP/failover.out" 2>"$TMP/failover.err"
+  while IFS= read -r line; do
+    case "$line" in
+      "PASS "*) pass "front failover: ${line#PASS }" ;;
+      "FAIL "*) fail "front failover: ${line#FAIL }" ;;
+      *) fail "front_failover.sh: $line" ;;
+    esac
+  done <"$TMP/failover.out"
+  check "front_failover.sh ran its 9 checks" test "$(grep -c '^PASS \|^FAIL ' "$TMP/failover.out")" = 9 ||
+    sed 's/^/       | /' "$TMP/failover.err" | tail -5
+else
+  echo "skip the Kubernetes front's failover run (front_failover.sh needs root for a network namespace)"
+fi
 
 # ---- compose and Kubernetes: parse, describe the topology, agree with scripts/cluster.sh, the
 # server's defaults and its image; resources, failover, disruption budget, autoscaling, spread,
@@ -105,28 +123,63 @@ done <"$TMP/yaml.out"
 check "deploy_yaml_check.py ran its checks" grep -q '^PASS ' "$TMP/yaml.out"
 
 # Each check above can fail: a copy broken in one way fails the check that guards it.
-# mutant NAME EXPECTED_FAILURE FILE PYTHON: PYTHON edits `docs` (the YAML documents of FILE, a
-# list) in place, with obj(kind, name) for a Kubernetes object; FILE = scripts/cluster.sh or
-# deploy/nginx.conf.template takes a sed expression instead.
-mutant() {
-  local name=$1 want=$2 file=$3 edit=$4 m="$TMP/mutant"
-  rm -rf "$m"; mkdir -p "$m/scripts"
-  cp -r docker deploy "$m/"; cp scripts/cluster.sh "$m/scripts/"; cp CMakeLists.txt .gitignore .dockerignore "$m/"
-  rm -f "$m/docker/redis.env"
-  if [ "$file" = scripts/cluster.sh ] || [ "$file" = deploy/nginx.conf.template ]; then sed -i "$edit" "$m/$file"
-  else
-    python3 - "$m/$file" "$edit" <<'PY'
-import sys, yaml
-path, edit = sys.argv[1], sys.argv[2]
-docs = [d for d in yaml.safe_load_all(open(path)) if d]
-def obj(kind, name):
-    return next(d for d in docs if d.get("kind") == kind and d["metadata"]["name"] == name)
-exec(edit)
-yaml.safe_dump_all(docs, open(path, "w"), sort_keys=False)
+# mutant NAME EXPECTED_FAILURE FILE PYTHON queues one: PYTHON edits `docs` (the YAML documents of
+# FILE, a list) in place, with obj(kind, name) for a Kubernetes object; FILE = scripts/cluster.sh
+# or deploy/nginx.conf.template takes a sed expression instead. run_mutants runs the queue in one
+# Python process (deploy_yaml_check.py on each copy), and each must show its expected failure.
+: >"$TMP/mutants"
+mutant() { printf '%s\0' "$@" >>"$TMP/mutants"; }
+run_mutants() {
+  python3 - "$TMP/mutants" "$TMP/mutant" "$HERE/deploy_yaml_check.py" "${cache_default:-1024}" "${deadline_default:-30}" \
+    >"$TMP/mutants.out" 2>"$TMP/mutants.err" <<'PY'
+import contextlib, io, os, runpy, shutil, subprocess, sys
+import yaml
+queue, m, check_script, cache, deadline = sys.argv[1:6]
+fields = open(queue).read().split("\0")[:-1]
+for k in range(0, len(fields), 4):
+    name, want, path, edit = fields[k:k + 4]
+    shutil.rmtree(m, ignore_errors=True)
+    os.makedirs(m + "/scripts")
+    for d in ("docker", "deploy"):
+        shutil.copytree(d, "%s/%s" % (m, d))
+    shutil.copy("scripts/cluster.sh", m + "/scripts/")
+    for f in ("CMakeLists.txt", ".gitignore", ".dockerignore"):
+        shutil.copy(f, m)
+    if os.path.exists(m + "/docker/redis.env"):
+        os.remove(m + "/docker/redis.env")
+    target = "%s/%s" % (m, path)
+    if path in ("scripts/cluster.sh", "deploy/nginx.conf.template"):
+        subprocess.run(["sed", "-i", edit, target], check=True)
+    else:
+        docs = [d for d in yaml.safe_load_all(open(target)) if d]
+        def obj(kind, name):
+            return next(d for d in docs if d.get("kind") == kind and d["metadata"]["name"] == name)
+        exec(edit)
+        yaml.safe_dump_all(docs, open(target, "w"), sort_keys=False)
+    out = io.StringIO()
+    sys.argv = [check_script, m, cache, deadline]
+    with contextlib.redirect_stdout(out):
+        try:
+            runpy.run_path(check_script, run_name="__main__")
+        except SystemExit:
+            pass
+    if "FAIL " + want in out.getvalue():
+        print("PASS broken copy fails: " + name)
+    else:
+        print("FAIL broken copy fails: " + name)
+        for line in [l for l in out.getvalue().splitlines() if not l.startswith("PASS")][:5]:
+            print("%s | %s" % (name, line), file=sys.stderr)
 PY
-  fi
-  local out; out=$(yaml_check "$m" 2>&1)
-  check "broken copy fails: $name" grep -qF "FAIL $want" <<<"$out" || sed 's/^/       | /' <<<"$out" | grep -v PASS | head -5
+  local line
+  while IFS= read -r line; do
+    case "$line" in
+      "PASS "*) pass "${line#PASS }" ;;
+      "FAIL "*) fail "${line#FAIL }" "$(grep -F "${line#FAIL broken copy fails: } | " "$TMP/mutants.err" | head -5)" ;;
+      *) fail "run_mutants: $line" ;;
+    esac
+  done <"$TMP/mutants.out"
+  check_eq "every broken copy was run" "$(grep -c '^PASS \|^FAIL ' "$TMP/mutants.out")" "$(($(tr -cd '\0' <"$TMP/mutants" | wc -c) / 4))" ||
+    sed 's/^/       | /' "$TMP/mutants.err" | tail -5
 }
 K=docker/kubernetes.yaml C=docker/compose.yaml
 fl_pod='obj("StatefulSet", "featureline")["spec"]["template"]["spec"]'
@@ -283,6 +336,8 @@ mutant "compose nginx writable" "compose nginx: read-only root file system" $C "
 mutant "compose Redis as root" "compose redis: runs as a numeric non-root user" $C "del docs[0]['services']['redis']['user']"
 mutant "compose nginx on Redis' network" "compose: only the replicas share a network with Redis" $C \
   "docs[0]['services']['nginx']['networks'].append('store')"
+
+run_mutants
 
 # ---- Redis started as the compose file's and the manifest's containers start it ------------------
 # Their start-up command and probe, run here with redis-server and redis-cli wrapped: the image's
