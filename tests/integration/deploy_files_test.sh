@@ -71,14 +71,15 @@ front_names=$(grep -oE '^ *server [a-z0-9-]+:' "$TMP/front.conf" | sed 's/^ *ser
 check "the front's upstreams name the replicas' Services" test -n "$front_names"
 { cat /etc/hosts; i=10; for n in $front_names; do echo "127.0.0.$i $n"; i=$((i + 1)); done; } >"$TMP/hosts"
 # front_nginx_t HOSTS_FILE: nginx -t on the front's nginx.conf, with HOSTS_FILE as /etc/hosts.
+# Not root: a user namespace, where only root is mapped, so nginx keeps it for its workers.
 front_nginx_t() {
-  local ns=(unshare --mount --propagation private) as=()
-  if [ "$(id -u)" = 0 ]; then as=(setpriv --reuid=101 --regid=101 --clear-groups)
-  else ns=(unshare --user --map-root-user --mount --propagation private); fi
+  local ns=(unshare --mount --propagation private) as=(setpriv --reuid=101 --regid=101 --clear-groups) user=""
+  [ "$(id -u)" = 0 ] || { ns=(unshare --user --map-root-user --mount --propagation private); as=(env); user="user root;"; }
   "${ns[@]}" bash -c 'set -e; exec 3<"$1"; mount --bind "$2" /etc/hosts; mount -t tmpfs -o size=16m,mode=1777 tmpfs /tmp
     mkdir -p /tmp/nginx/logs /tmp/nginx/nginx-temp /tmp/etc; cat <&3 >/tmp/etc/nginx.conf
-    [ "$3" = 0 ] || chown -R 101:101 /tmp/nginx
-    shift 3; "$@" /usr/sbin/nginx -t -p /tmp/nginx -e stderr -c /tmp/etc/nginx.conf 2>&1' _ "$TMP/front.conf" "$1" "${#as[@]}" "${as[@]}" 2>&1
+    [ -n "$3" ] || chown -R 101:101 /tmp/nginx
+    g=$3; shift 3; "$@" /usr/sbin/nginx -t -p /tmp/nginx -e stderr -c /tmp/etc/nginx.conf ${g:+-g "$g"} 2>&1' \
+    _ "$TMP/front.conf" "$1" "$user" "${as[@]}" 2>&1
 }
 out=$(front_nginx_t "$TMP/hosts")
 check "nginx -t accepts the Kubernetes front's nginx.conf (the ConfigMap's text)" grep -q "test is successful" <<<"$out" ||
