@@ -3,11 +3,12 @@
 
   deploy_yaml_check.py ROOT CACHE_MB_DEFAULT DEADLINE_S_DEFAULT
 
-ROOT holds docker/, scripts/cluster.sh and CMakeLists.txt; the defaults are the server's own
-(from its --help). Prints one line per check, "PASS name" or "FAIL name: detail"; exits 1 if
+ROOT holds docker/, deploy/, scripts/cluster.sh and CMakeLists.txt; the defaults are the server's
+own (from its --help). Prints one line per check, "PASS name" or "FAIL name: detail"; exits 1 if
 any failed. deploy_files_test.sh also runs it on broken copies to see those checks fail.
 """
 import re
+import subprocess
 import sys
 
 import yaml
@@ -198,9 +199,11 @@ check("compose: only the replicas share a network with Redis", redis_nets and sh
 # ---- Kubernetes
 docs = [d for d in yaml.safe_load_all(read("docker/kubernetes.yaml")) if d]
 kinds = {(d["kind"], d["metadata"]["name"]) for d in docs}
-for k in [("Namespace", "featureline"), ("Deployment", "featureline"), ("Service", "featureline"), ("StatefulSet", "redis"),
-          ("Service", "redis"), ("Ingress", "featureline"), ("PodDisruptionBudget", "featureline"),
-          ("HorizontalPodAutoscaler", "featureline"), ("NetworkPolicy", "redis"), ("NetworkPolicy", "featureline")]:
+for k in [("Namespace", "featureline"), ("StatefulSet", "featureline"), ("StatefulSet", "redis"), ("Service", "redis"),
+          ("PodDisruptionBudget", "featureline"), ("HorizontalPodAutoscaler", "featureline"),
+          ("ConfigMap", "featureline-front-nginx"), ("Deployment", "featureline-front"), ("Service", "featureline-front"),
+          ("PodDisruptionBudget", "featureline-front"),
+          ("NetworkPolicy", "redis"), ("NetworkPolicy", "featureline"), ("NetworkPolicy", "featureline-front")]:
     check("kubernetes: %s %s" % k, k in kinds)
 CLUSTER_SCOPED = {"Namespace", "ClusterRole", "ClusterRoleBinding", "PriorityClass", "StorageClass"}
 for d in docs:
@@ -220,8 +223,15 @@ for d in docs:
 by_kind = {}
 for d in docs:
     by_kind.setdefault(d["kind"], []).append(d)
-deploys = by_kind.get("Deployment", [])
-dep = deploys[0] if deploys else {"spec": {"template": {"metadata": {}, "spec": {"containers": [{}]}}}}
+EMPTY_WORKLOAD = {"metadata": {}, "spec": {"template": {"metadata": {}, "spec": {"containers": [{}]}}}}
+
+
+def obj(kind, name, default=None):
+    return next((d for d in docs if d["kind"] == kind and d["metadata"]["name"] == name), default)
+
+
+# The replicas (StatefulSet featureline) and the nginx in front of them (Deployment featureline-front).
+dep = obj("StatefulSet", "featureline", EMPTY_WORKLOAD)
 pod = dep["spec"]["template"]["spec"]
 pod_labels = dep["spec"]["template"]["metadata"].get("labels", {})
 c = pod["containers"][0]
@@ -277,21 +287,22 @@ check("kubernetes: replicas spread across nodes (topologySpreadConstraints or po
 hpas = by_kind.get("HorizontalPodAutoscaler", [])
 if hpas:
     h = hpas[0]["spec"]
-    check("kubernetes: the HPA scales the featureline Deployment",
-          h.get("scaleTargetRef", {}).get("kind") == "Deployment" and h["scaleTargetRef"].get("name") == dep["metadata"].get("name"))
+    check("kubernetes: the HPA scales the featureline StatefulSet",
+          h.get("scaleTargetRef", {}).get("kind") == "StatefulSet" and h["scaleTargetRef"].get("name") == dep["metadata"].get("name"))
     check("kubernetes: the HPA keeps several replicas", h.get("minReplicas", 1) >= 2 and h.get("maxReplicas", 0) >= h.get("minReplicas", 1))
     check("kubernetes: the HPA scales on CPU",
           any(m.get("type") == "Resource" and m.get("resource", {}).get("name") == "cpu" for m in h.get("metrics", [])))
-    check("kubernetes: the Deployment leaves the replica count to the HPA (no replicas field)", "replicas" not in dep["spec"])
+    check("kubernetes: the StatefulSet leaves the replica count to the HPA (no replicas field)", "replicas" not in dep["spec"])
     check("kubernetes: the replicas request CPU (the HPA's utilization is relative to it)", "cpu" in res.get("requests", {}))
 else:
     check("kubernetes: several replicas", dep["spec"].get("replicas", 1) >= 2)
 pdbs = by_kind.get("PodDisruptionBudget", [])
+check("kubernetes: a PodDisruptionBudget selects the replicas",
+      any(p["spec"].get("selector", {}).get("matchLabels") and p["spec"]["selector"]["matchLabels"].items() <= pod_labels.items()
+          for p in pdbs))
 for p in pdbs:
     s = p["spec"]
-    check("kubernetes: the PodDisruptionBudget selects the replicas",
-          s.get("selector", {}).get("matchLabels") and s["selector"]["matchLabels"].items() <= pod_labels.items())
-    check("kubernetes: the PodDisruptionBudget allows one replica down at a time",
+    check("kubernetes: the PodDisruptionBudget %s allows one pod down at a time" % p["metadata"]["name"],
           s.get("maxUnavailable") == 1 or (isinstance(s.get("minAvailable"), int) and s["minAvailable"] >= 1))
 
 # Images: the server's from the project's version, the others an exact release.
@@ -334,7 +345,7 @@ check("kubernetes: the replicas' /tmp is a writable emptyDir",
 
 # Redis' password: in a Secret the operator creates (none shipped), read by Redis on standard
 # input and by the replicas from FEATURELINE_REDIS_PASSWORD; never a literal, never in a URL.
-sts = by_kind.get("StatefulSet", [{}])[0]
+sts = obj("StatefulSet", "redis", {})
 redis_c = sts.get("spec", {}).get("template", {}).get("spec", {}).get("containers", [{}])[0]
 redis_script = " ".join(str(a) for a in redis_c.get("command", []) + redis_c.get("args", []))
 check("kubernetes Redis: durable and never evicting",
@@ -370,15 +381,167 @@ check("kubernetes: a NetworkPolicy admits only the replicas to Redis",
           f["podSelector"]["matchLabels"].items() <= pod_labels.items() for f in froms), froms)
 fl_pol = policy_for(pod_labels)
 froms = [f for p in fl_pol for rule in p["spec"].get("ingress", []) for f in (rule.get("from") or [{}])]
-check("kubernetes: a NetworkPolicy admits only the ingress controller to the replicas",
-      fl_pol and froms and all("namespaceSelector" in f and f["namespaceSelector"].get("matchLabels") and "ipBlock" not in f
-                               for f in froms), froms)
+front = obj("Deployment", "featureline-front", EMPTY_WORKLOAD)
+front_pod = front["spec"]["template"]["spec"]
+front_labels = front["spec"]["template"]["metadata"].get("labels", {})
+check("kubernetes: a NetworkPolicy admits only the front to the replicas",
+      fl_pol and froms and front_labels and
+      all(set(f) == {"podSelector"} and f["podSelector"].get("matchLabels") and
+          f["podSelector"]["matchLabels"].items() <= front_labels.items() for f in froms), froms)
 
-for ing in by_kind.get("Ingress", []):
-    a = ing["metadata"].get("annotations", {})
-    check("ingress hashes on $mesh_id", a.get("nginx.ingress.kubernetes.io/upstream-hash-by") == "$mesh_id")
-    check("ingress body size limit", a.get("nginx.ingress.kubernetes.io/proxy-body-size") == "256m")
-patch = yaml.safe_load(read("docker/ingress-nginx-controller-patch.yaml"))
-check("the ingress-nginx ConfigMap patch is data only (merged, not an object)", set(patch) == {"data"}, sorted(patch))
-check("the ingress-nginx ConfigMap patch defines $mesh_id", "$mesh_id" in patch.get("data", {}).get("http-snippet", ""))
+# ---- the front: nginx (Deployment featureline-front) running the repository's template, rendered
+# into a ConfigMap, which hashes on the mesh id over one Service per replica ordinal up to the
+# autoscaler's maximum and retries a failed request on the next replica.
+hpa_max = hpas[0]["spec"].get("maxReplicas", 0) if hpas else 0
+replica_port = next((p.get("containerPort") for p in c.get("ports", []) if p.get("name") == "http"), None)
+POD_NAME = "statefulset.kubernetes.io/pod-name"
+
+
+def ordinal_server(i):
+    """HOST:PORT of the Service of ordinal i, or None when it is missing or not a ClusterIP
+    Service for that pod alone."""
+    name = "%s-%d" % (dep["metadata"].get("name"), i)
+    svc = obj("Service", name)
+    if not svc:
+        return None
+    spec = svc["spec"]
+    selector = dict(spec.get("selector", {}))
+    ports = spec.get("ports", [])
+    if (selector.pop(POD_NAME, None) != name or not selector.items() <= pod_labels.items() or
+            spec.get("type", "ClusterIP") != "ClusterIP" or spec.get("clusterIP") == "None" or
+            len(ports) != 1 or ports[0].get("targetPort") not in ("http", replica_port)):
+        return None
+    return "%s:%s" % (name, ports[0].get("port"))
+
+
+ordinal_servers = [ordinal_server(i) for i in range(hpa_max)]
+check("kubernetes: a ClusterIP Service for each replica ordinal 0-%d (the HPA's maxReplicas), selecting that pod only" % (hpa_max - 1),
+      hpa_max > 0 and None not in ordinal_servers,
+      [i for i, s in enumerate(ordinal_servers) if s is None])
+check("kubernetes: the StatefulSet creates and removes pods in parallel (podManagementPolicy)",
+      dep["spec"].get("podManagementPolicy") == "Parallel")
+governing = obj("Service", dep["spec"].get("serviceName", ""))
+check("kubernetes: the StatefulSet's serviceName is a headless Service of the replicas",
+      governing is not None and governing["spec"].get("clusterIP") == "None" and
+      governing["spec"].get("selector") and governing["spec"]["selector"].items() <= pod_labels.items())
+
+front_cm = obj("ConfigMap", "featureline-front-nginx", {})
+conf = front_cm.get("data", {}).get("nginx.conf", "")
+# The ConfigMap is the template as render-nginx-conf.sh renders it for this manifest, never a copy
+# that could drift from it.
+try:
+    rendered = subprocess.run(["bash", "%s/docker/kubernetes-nginx-conf.sh" % root, "%s/docker/kubernetes.yaml" % root],
+                              capture_output=True, text=True, timeout=60)
+    want, why = rendered.stdout, rendered.stderr.strip()
+except (OSError, subprocess.SubprocessError) as e:
+    want, why = None, str(e)
+first_diff = next(((n + 1, a, b) for n, (a, b) in enumerate(zip(conf.splitlines(), (want or "").splitlines())) if a != b),
+                  (len(conf.splitlines()), len((want or "").splitlines())))
+check("kubernetes front: the ConfigMap's nginx.conf is deploy/render-nginx-conf.sh's output for this manifest "
+      "(docker/kubernetes-nginx-conf.sh --update writes it)", want and conf == want, why or first_diff)
+
+
+def directives(text, name):
+    """The arguments of every `name ...;` line of an nginx configuration."""
+    return [m.group(1).split() for m in re.finditer(r'^\s*' + re.escape(name) + r'\s+([^;#]*);', text, re.M)]
+
+
+upstreams = {m.group(1): m.group(2) for m in re.finditer(r'^\s*upstream\s+(\S+)\s*\{(.*?)^\s*\}', conf, re.M | re.S)}
+by_mesh = [body for body in upstreams.values() if ["$mesh_id", "consistent"] in directives(body, "hash")]
+check("kubernetes front: an upstream hashes on $mesh_id, consistent", len(by_mesh) == 1, sorted(upstreams))
+listed = {name: [args[0] for args in directives(body, "server")] for name, body in upstreams.items()}
+check("kubernetes front: every upstream lists the ordinals' Services, each once (%d)" % hpa_max,
+      upstreams and None not in ordinal_servers and all(sorted(v) == sorted(ordinal_servers) for v in listed.values()), listed)
+passive = all(any(a.startswith("max_fails=") and a != "max_fails=0" for a in args) and
+              any(a.startswith("fail_timeout=") for a in args)
+              for body in upstreams.values() for args in directives(body, "server"))
+check("kubernetes front: a replica that fails is skipped for a while (max_fails, fail_timeout)", upstreams and passive)
+next_upstream = sum(directives(conf, "proxy_next_upstream"), [])
+check("kubernetes front: a refused, failed or timed-out request goes to the next replica, uploads too "
+      "(proxy_next_upstream error timeout non_idempotent)",
+      {"error", "timeout", "non_idempotent"} <= set(next_upstream), next_upstream)
+tries = [int(a[0]) for a in directives(conf, "proxy_next_upstream_tries") if a and a[0].isdigit()]
+check("kubernetes front: proxy_next_upstream_tries %s reaches every ordinal (>= %d, the HPA's maxReplicas)" % (tries, hpa_max),
+      len(tries) == 1 and (tries[0] == 0 or tries[0] >= hpa_max > 0))
+
+fc = front_pod["containers"][0]
+compose_nginx = services.get("nginx", {})
+check("kubernetes front: at least 2 nginx pods", front["spec"].get("replicas", 1) >= 2)
+check("kubernetes front: the image Compose runs (%s)" % compose_nginx.get("image"),
+      fc.get("image") and fc.get("image") == compose_nginx.get("image"))
+front_user = (fc.get("securityContext", {}).get("runAsUser", front_pod.get("securityContext", {}).get("runAsUser")),
+              fc.get("securityContext", {}).get("runAsGroup", front_pod.get("securityContext", {}).get("runAsGroup")))
+check("kubernetes front: nginx runs as Compose's nginx user (%s)" % compose_nginx.get("user"),
+      "%s:%s" % front_user == str(compose_nginx.get("user")), front_user)
+front_cmd = " ".join(str(a) for a in fc.get("command", []) + fc.get("args", []))
+conf_mounts = [m.get("mountPath", "").rstrip("/") + "/" + m.get("subPath", "nginx.conf").split("/")[-1]
+               for m in fc.get("volumeMounts", []) for v in front_pod.get("volumes", [])
+               if v.get("name") == m.get("name") and v.get("configMap", {}).get("name") == "featureline-front-nginx"]
+conf_arg = re.search(r'\bnginx\b.*\s-c\s+(\S+)', front_cmd)
+check("kubernetes front: nginx runs the ConfigMap's nginx.conf (-c)", conf_arg and conf_arg.group(1) in conf_mounts,
+      (conf_arg and conf_arg.group(1), conf_mounts))
+writable = [m["mountPath"].rstrip("/") + "/" for m in fc.get("volumeMounts", []) for v in front_pod.get("volumes", [])
+            if v.get("name") == m.get("name") and "emptyDir" in v]
+written = [a[0] for name in ("pid", "error_log", "access_log", "client_body_temp_path", "proxy_temp_path",
+                             "fastcgi_temp_path", "uwsgi_temp_path", "scgi_temp_path") for a in directives(conf, name) if a]
+check("kubernetes front: every file nginx writes (pid, logs, temporary files) is on a writable emptyDir",
+      written and writable and all(any(w.startswith(d) for d in writable) for w in written),
+      [w for w in written if not any(w.startswith(d) for d in writable)])
+listen = sum(directives(conf, "listen"), [])
+front_port = next((p.get("containerPort") for p in fc.get("ports", [])), None)
+check("kubernetes front: nginx listens on the container's port (%s)" % front_port,
+      listen and listen[0].rsplit(":", 1)[-1] == str(front_port), listen)
+
+
+def probes_port(ct, port):
+    ok = []
+    for name in ("readinessProbe", "livenessProbe"):
+        p = ct.get(name, {})
+        target = (p.get("tcpSocket") or p.get("httpGet") or {}).get("port")
+        ok.append(target in (port, next((q.get("name") for q in ct.get("ports", []) if q.get("containerPort") == port), None)))
+    return all(ok)
+
+
+check("kubernetes front: readiness and liveness probes on nginx's port", front_port and probes_port(fc, front_port))
+front_pre = " ".join(str(a) for a in fc.get("lifecycle", {}).get("preStop", {}).get("exec", {}).get("command", []))
+front_sleep = re.search(r'\bsleep\s+([0-9.]+)', front_pre)
+check("kubernetes front: a preStop hook sleeps, then nginx quits gracefully (SIGQUIT) and is waited for",
+      front_sleep and re.search(r'kill\s+-(QUIT|3|s\s+QUIT)\s+1\b', front_pre) and "kill -0 1" in front_pre, front_pre)
+read_timeout = [a[0] for a in directives(conf, "proxy_read_timeout")]
+read_s = float(read_timeout[0].rstrip("s")) if read_timeout and re.fullmatch(r'[0-9]+s?', read_timeout[0]) else None
+front_grace = front_pod.get("terminationGracePeriodSeconds", 30)
+check("kubernetes front: terminationGracePeriodSeconds (%s) >= preStop + proxy_read_timeout (%s s) + 5 s" % (front_grace, read_s),
+      front_sleep and read_s is not None and front_grace >= float(front_sleep.group(1)) + read_s + 5)
+
+
+def spread_across_nodes(pod_spec, labels):
+    spread = pod_spec.get("topologySpreadConstraints", [])
+    anti = pod_spec.get("affinity", {}).get("podAntiAffinity", {})
+    terms = anti.get("requiredDuringSchedulingIgnoredDuringExecution", []) + \
+        [t.get("podAffinityTerm", {}) for t in anti.get("preferredDuringSchedulingIgnoredDuringExecution", [])]
+    return any(t.get("topologyKey") == "kubernetes.io/hostname" and t.get("labelSelector", {}).get("matchLabels") and
+               t["labelSelector"]["matchLabels"].items() <= labels.items() for t in spread + terms)
+
+
+check("kubernetes front: nginx pods spread across nodes", front_labels and spread_across_nodes(front_pod, front_labels))
+check("kubernetes front: a PodDisruptionBudget selects the front",
+      front_labels and any(p["spec"].get("selector", {}).get("matchLabels") and
+                           p["spec"]["selector"]["matchLabels"].items() <= front_labels.items() for p in pdbs))
+front_svc = obj("Service", "featureline-front", {"spec": {}})["spec"]
+svc_type = front_svc.get("type", "ClusterIP")
+check("kubernetes front: its Service selects the nginx pods, on nginx's port",
+      front_labels and front_svc.get("selector") and front_svc["selector"].items() <= front_labels.items() and
+      front_svc.get("ports") and all(p.get("targetPort") in (front_port, "http") for p in front_svc["ports"]))
+check("kubernetes front: its Service is ClusterIP, or a LoadBalancer keeping clients' addresses (externalTrafficPolicy Local) "
+      "for nginx's per-address limits (%s)" % svc_type,
+      svc_type == "ClusterIP" or (svc_type == "LoadBalancer" and front_svc.get("externalTrafficPolicy") == "Local"))
+front_pol = policy_for(front_labels) if front_labels else []
+front_rule_ports = [p.get("port") for pol in front_pol for rule in pol["spec"].get("ingress", []) for p in (rule.get("ports") or [{}])]
+check("kubernetes front: a NetworkPolicy admits clients to nginx's port only (%s)" % front_rule_ports,
+      front_pol and all("Ingress" in pol["spec"].get("policyTypes", ["Ingress"]) for pol in front_pol) and
+      front_rule_ports and all(p in (front_port, "http") for p in front_rule_ports))
+hashing_ingresses = [i["metadata"]["name"] for i in by_kind.get("Ingress", [])
+                     if "nginx.ingress.kubernetes.io/upstream-hash-by" in i["metadata"].get("annotations", {})]
+check("kubernetes: no Ingress hashes by itself (ingress-nginx's upstream-hash-by retries on the same pod)",
+      not hashing_ingresses, hashing_ingresses)
 sys.exit(1 if failed else 0)

@@ -19,21 +19,13 @@ set -u
 # shellcheck source=lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"  # HERE, ROOT (the working directory), check/pass/fail/finish, http
 [ "$(id -u)" = 0 ] || { echo "FAIL the image test runs as root (podman's store, chroot, mount)"; exit 1; }
-# Inside a chroot whose / is a plain folder (a fresh machine made by debootstrap, as
-# ../shared/tools/fresh-debian makes one), podman's storage cannot make / private ("remount /:
-# invalid argument") and no image can be imported or built. The test then runs itself again in a
-# private mount namespace, chrooted into a recursive bind mount of / (whose root is a mount point);
-# the mounts go with the namespace when the test ends.
-if ! awk '$5 == "/" { found = 1 } END { exit !found }' /proc/self/mountinfo && [ -z "${FEATURELINE_ROOT_REBOUND:-}" ]; then
-  rebound=$(mktemp -d /var/tmp/featureline-root.XXXXXX)
-  echo "# / is not a mount point here: running in a bind mount of / at $rebound"
-  unshare --mount --propagation unchanged /bin/bash -c '
-    mount --rbind / "$1" && mount --make-rprivate "$1" || exit 97
-    exec chroot "$1" /usr/bin/env FEATURELINE_ROOT_REBOUND=1 /bin/bash -c "cd \"\$0\" && exec bash \"\$1\"" "$2" "$3"' \
-    _ "$rebound" "$PWD" "$(realpath "${BASH_SOURCE[0]}")"
-  rc=$?
-  rmdir "$rebound"
-  exit $rc
+# Where / is not a mount point (a fresh machine made by debootstrap), podman's storage cannot make
+# / private ("remount /: invalid argument") and no image can be imported or built: the test then
+# runs itself again where it is one (in_private_mounts, lib.sh).
+if ! root_is_mount_point; then
+  echo "# / is not a mount point here: running in a private bind mount of /"
+  in_private_mounts bash "$(realpath "${BASH_SOURCE[0]}")"
+  exit $?
 fi
 for tool in curl jq unshare chroot; do command -v "$tool" >/dev/null || { echo "FAIL $tool is missing"; exit 1; }; done
 FACTOR=1

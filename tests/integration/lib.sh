@@ -126,6 +126,28 @@ stop_server() {
 
 # Kills what this script started (servers and background requests), by process id.
 # stop_pids TRIES PID...: SIGTERM to each, up to TRIES x 0.1 s for all to exit, then SIGKILL.
+# in_private_mounts COMMAND...: COMMAND in a mount namespace of its own (its mounts are seen by
+# nobody else and go with it). unshare --propagation private makes / private, which fails
+# ("cannot change root filesystem propagation") where / is not a mount point: a chroot into a
+# folder, as on a fresh machine made by debootstrap. There COMMAND runs chrooted into a
+# recursive bind mount of / made private in the new namespace, from the same directory.
+root_is_mount_point() { awk '$5 == "/" { found = 1 } END { exit !found }' /proc/self/mountinfo; }
+in_private_mounts() {
+  if root_is_mount_point; then
+    unshare --mount --propagation private "$@"
+    return
+  fi
+  local rebound rc
+  rebound=$(mktemp -d /var/tmp/featureline-root.XXXXXX)
+  unshare --mount --propagation unchanged /bin/bash -c '
+    mount --rbind / "$1" && mount --make-rprivate "$1" || exit 97
+    rebound=$1 dir=$2; shift 2
+    exec chroot "$rebound" /bin/bash -c "cd \"\$0\" && exec \"\$@\"" "$dir" "$@"' _ "$rebound" "$PWD" "$@"
+  rc=$?
+  rmdir "$rebound"
+  return $rc
+}
+
 stop_pids() {
   local tries=$1 pid; shift
   for pid in "$@"; do kill -TERM "$pid" 2>/dev/null; done
