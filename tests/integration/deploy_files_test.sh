@@ -90,7 +90,7 @@ check "... and refuses it where the Services' names do not resolve (so they were
 # ... and run: routing and failover with stand-in replicas for 3 of the 6 ordinals, one SIGKILLed
 # (front_failover.sh, in a network namespace of its own: needs root).
 if [ "$(id -u)" = 0 ]; then
-  timeout 120 in_private_mounts unshare --net bash "$HERE/front_failover.sh" "$TMP/front.conf" \
+  in_private_mounts timeout 120 unshare --net bash "$HERE/front_failover.sh" "$TMP/front.conf" \
     >"$TMP/failover.out" 2>"$TMP/failover.err"
   while IFS= read -r line; do
     case "$line" in
@@ -197,7 +197,7 @@ mutant "memory limit 1536Mi for a 1024 MiB cache" "kubernetes: memory limit >= 2
 mutant "a larger --cache-mb under the same limit" "kubernetes: memory limit >= 2 x --cache-mb (1536)" $K \
   "a = $fl_pod['containers'][0]['args']; a[a.index('--cache-mb') + 1] = '1536'"
 mutant "compose memory limit 1536M" "compose replicas' memory limit" $C \
-  "docs[0]['services']['featureline']['deploy']['resources']['limits']['memory'] = '1536M'"
+  "for r in ['featureline-1', 'featureline-2', 'featureline-3']: docs[0]['services'][r]['deploy']['resources']['limits']['memory'] = '1536M'"
 mutant "no preStop hook" "kubernetes: a preStop hook" $K "del $fl_pod['containers'][0]['lifecycle']"
 mutant "grace period shorter than --deadline-s" "kubernetes: terminationGracePeriodSeconds" $K \
   "$fl_pod['terminationGracePeriodSeconds'] = 30"
@@ -212,6 +212,14 @@ mutant "server image :latest" "kubernetes featureline/featureline-server: image 
   "$fl_pod['containers'][0]['image'] = 'featureline-server:latest'"
 mutant "redis:7.0 (not an exact release)" "kubernetes redis/redis: image pinned" $K \
   "obj('StatefulSet', 'redis')['spec']['template']['spec']['containers'][0]['image'] = 'redis:7.0'"
+mutant "compose replicas as one service scaled to 3" "compose services are redis, featureline-1..3, nginx" $C \
+  "s = docs[0]['services']; s['featureline'] = s.pop('featureline-1'); s['featureline']['deploy']['replicas'] = 3; del s['featureline-2'], s['featureline-3']"
+mutant "compose nginx given one name for the replicas" "compose nginx names every replica on its own" $C \
+  "docs[0]['services']['nginx']['command'][2] = docs[0]['services']['nginx']['command'][2].replace('featureline-1:8080 featureline-2:8080 featureline-3:8080', 'featureline:8080')"
+mutant "compose replica 2 configured differently" "compose: the 3 replicas are configured alike" $C \
+  "s = docs[0]['services']; s['featureline-2'] = dict(s['featureline-2'], command=['--store', 'redis://redis:6379'])"
+mutant "compose nginx not waiting for replica 3" "compose nginx waits for every replica to be healthy" $C \
+  "del docs[0]['services']['nginx']['depends_on']['featureline-3']"
 mutant "compose nginx unpinned" "compose nginx: image pinned" $C "docs[0]['services']['nginx']['image'] = 'nginx'"
 mutant "Redis allows privilege escalation" "restricted redis/redis: allowPrivilegeEscalation false" $K \
   "obj('StatefulSet', 'redis')['spec']['template']['spec']['containers'][0]['securityContext']['allowPrivilegeEscalation'] = True"
@@ -324,11 +332,11 @@ mutant "Redis' protected mode off" "kubernetes Redis: protected mode on" $K \
 mutant "Redis' probe without the password" "kubernetes Redis: its probe authenticates" $K \
   "c = $redis_k; c['readinessProbe']['exec']['command'] = ['redis-cli', 'ping']"
 mutant "compose replicas without the env file" "compose: Redis and the replicas read the same env file" $C \
-  "del docs[0]['services']['featureline']['env_file']"
+  "for r in ['featureline-1', 'featureline-2', 'featureline-3']: docs[0]['services'][r].pop('env_file', None)"
 mutant "compose env file git does not ignore" "compose: the env file docker/secrets.env is the operator's" $C \
-  "docs[0]['services']['featureline']['env_file'] = docs[0]['services']['redis']['env_file'] = ['secrets.env']"
+  "for r in ['featureline-1', 'featureline-2', 'featureline-3']: docs[0]['services'][r]['env_file'] = docs[0]['services']['redis']['env_file'] = ['secrets.env']"
 mutant "compose password in environment:" "compose: no password in an environment: entry" $C \
-  "docs[0]['services']['featureline']['environment'] = ['FEATURELINE_REDIS_PASSWORD=x']"
+  "for r in ['featureline-1', 'featureline-2', 'featureline-3']: docs[0]['services'][r]['environment'] = ['FEATURELINE_REDIS_PASSWORD=x']"
 mutant "compose Redis protected mode off" "compose Redis: protected mode on" $C \
   "c = docs[0]['services']['redis']['command']; c[-1] = c[-1].replace('--protected-mode yes', '--protected-mode no')"
 mutant "compose Redis health check without the password" "compose Redis: its health check authenticates" $C \

@@ -128,10 +128,16 @@ def ignored(path, patterns_file):
 # ---- compose
 compose = yaml.safe_load(read("docker/compose.yaml"))
 services = compose.get("services", {})
-check("compose services are redis, featureline, nginx", set(services) == {"redis", "featureline", "nginx"}, sorted(services))
-fl = services.get("featureline", {})
+REPLICAS = ["featureline-1", "featureline-2", "featureline-3"]
+check("compose services are redis, featureline-1..3, nginx", set(services) == {"redis", "nginx", *REPLICAS}, sorted(services))
+# One service per replica, each its own name on nginx's hash ring (one name with several
+# addresses gives them a single place on it: ids would not stick); all configured alike.
+replicas = [services.get(n, {}) for n in REPLICAS]
+check("compose: the 3 replicas are configured alike", all(r == replicas[0] for r in replicas))
+check("compose: no replica is scaled by deploy.replicas (one name per replica)",
+      all("replicas" not in r.get("deploy", {}) for r in replicas))
+fl = replicas[0]
 fl_cmd = [str(a) for a in fl.get("command", [])]
-check("compose: 3 featureline replicas", fl.get("deploy", {}).get("replicas") == 3)
 check("compose builds docker/Dockerfile.server", fl.get("build", {}).get("dockerfile") == "docker/Dockerfile.server")
 check("compose replicas use the Redis store", "redis://redis:6379" in fl_cmd)
 for name, want in cluster_flags.items():
@@ -139,7 +145,12 @@ for name, want in cluster_flags.items():
 health = " ".join(fl.get("healthcheck", {}).get("test", []))
 check("compose replica healthcheck asks /readyz for a 200", "/readyz" in health and "' 200 '" in health)
 nginx_cmd = " ".join(services.get("nginx", {}).get("command", []))
-check("compose nginx renders the repository's template", "render-nginx-conf.sh" in nginx_cmd and "featureline:8080" in nginx_cmd)
+check("compose nginx renders the repository's template", "render-nginx-conf.sh" in nginx_cmd)
+check("compose nginx names every replica on its own (featureline-N:8080)",
+      re.search(r'render-nginx-conf\.sh \S+ \S+ \S+ ' + " ".join(n + ":8080" for n in REPLICAS) + r'(\s|>)', nginx_cmd) is not None,
+      nginx_cmd)
+check("compose nginx waits for every replica to be healthy",
+      all(services.get("nginx", {}).get("depends_on", {}).get(n, {}).get("condition") == "service_healthy" for n in REPLICAS))
 check("compose Redis uses deploy/redis.conf", "appendonly" not in " ".join(services.get("redis", {}).get("command", [])) and
       any("redis.conf" in v for v in services.get("redis", {}).get("volumes", [])))
 for name, s in services.items():
@@ -194,7 +205,7 @@ env_literals = [(n, k) for n, s in services.items() for k in environment_names(s
 check("compose: no password in an environment: entry", not env_literals, env_literals)
 redis_nets = services.get("redis", {}).get("networks", [])
 sharing = {n for n, s in services.items() if n != "redis" and set(s.get("networks", [])) & set(redis_nets)}
-check("compose: only the replicas share a network with Redis", redis_nets and sharing == {"featureline"}, sharing)
+check("compose: only the replicas share a network with Redis", redis_nets and sharing == set(REPLICAS), sharing)
 
 # ---- Kubernetes
 docs = [d for d in yaml.safe_load_all(read("docker/kubernetes.yaml")) if d]
