@@ -2,7 +2,7 @@
 // The page's store, actions and request effects without a browser: a fake API answers when the
 // test says so, so opening a mesh, editing keys, the one-request-in-flight line updates (and
 // answers that arrive for keys changed since), undo/redo with cached answers, a failed line,
-// a forgotten mesh and a decomposition are checked against the state they leave.
+// a forgotten mesh, a decomposition and a traced line are checked against the state they leave.
 //   node --test tests/web/store_test.mjs
 import assert from 'node:assert/strict';
 import test from 'node:test';
@@ -12,6 +12,7 @@ import { createLineRequests } from '../../web/src/line_requests.js';
 import { createMeshEffects, outlineCreases } from '../../web/src/mesh_effects.js';
 import { activeLine, colorMode, createPageStore, isStale, segmentationStale } from '../../web/src/model.js';
 import { createSegmentation } from '../../web/src/segmentation.js';
+import { createTracing } from '../../web/src/trace.js';
 
 // Lets queued microtasks and timers of zero delay run (the store tells its subscribers in a microtask).
 const settle = async () => {
@@ -339,4 +340,31 @@ test('the active line and the store tell subscribers once per task', async () =>
   await settle();
   assert.ok(calls >= 1 && calls <= 3, `${calls} notifications`);
   assert.equal(activeLine(state).keys.length, 3);
+});
+
+test('trace mode: a click traces a line into the empty active line; nothing to trace edits nothing', async () => {
+  const { state, store, api } = await openedPage();
+  const tracing = createTracing(store, api, { now: () => 0 });
+  const clicked = tracing.traceClick(2);
+  await settle();
+  const [, body] = api.pending('detectFeatureLines')[0].args;
+  assert.deepEqual(body, { keys: [2], trace: true, options: { refine: false } }); // the preview's request
+  api.answer('detectFeatureLines', (id, b) => ({ ...lineAnswer({ keys: [2, 1, 0] }), closed: false, trace: { sign: 'ridge', ends: [{ reason: 'boundary', vertex: 2 }, { reason: 'boundary', vertex: 0 }] } }));
+  await clicked;
+  assert.deepEqual(state.lines.map((l) => [l.id, l.keys, l.trace]), [[1, [2], true]]);
+  assert.equal(store.history.undoLabel, 'trace a line from vertex 2');
+  assert.match(state.message, /^Line 1: the ridge through vertex 2, 2 edges, both ends at the boundary/);
+  await settle();
+  // The traced line's own request (refined), sent by the line requests.
+  assert.deepEqual(api.pending('detectFeatureLines')[0].args[1], { keys: [2], trace: true });
+  api.answer('detectFeatureLines', (id, b) => ({ ...lineAnswer({ keys: [2, 1, 0] }), trace: { sign: 'ridge', ends: [] } }));
+  await settle();
+  assert.equal(isStale(state.lines[0], state.options), false);
+  const missed = tracing.traceClick(3);
+  await settle();
+  api.fail('detectFeatureLines', new ApiError(422, 'no_feature', 'vertex 3 is on no feature'));
+  await missed;
+  assert.equal(state.lines.length, 1);
+  assert.match(state.message, /^Nothing to trace at vertex 3: vertex 3 is on no feature/);
+  assert.equal(state.pendingTraces, 0);
 });
