@@ -243,6 +243,35 @@ void add_compact_indices(tinygltf::Model& model, tinygltf::Primitive& primitive,
   else add(std::uint32_t{}, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);
 }
 
+// The prepared mesh's crease marks as LINES primitives over the surface's POSITION accessor:
+// one for the convex creases, one for the concave ones (each left out when empty, as glTF has no
+// empty accessor), an edge as its two vertex ids, lower first, in adjacency order. The page
+// draws these rather than guessing creases at a fixed angle, so the outlines it shows are the
+// edges the lines follow. Their count and the angle go into the surface primitive's extras, so
+// a reader can tell "no creases" from "not sent".
+void add_crease_lines(tinygltf::Model& model, tinygltf::Mesh& mesh, const PreparedMesh& pm) {
+  const int position = mesh.primitives.at(0).attributes.at("POSITION");
+  const int index_component =
+      model.accessors[mesh.primitives.at(0).indices].componentType;  // the surface's smallest type fits
+  for (const int sign : {1, -1}) {
+    std::vector<std::uint32_t> pairs;
+    for (std::uint32_t v = 0; v < pm.n_vertices(); ++v)
+      for (std::uint32_t i = pm.neighbor_offsets[v]; i < pm.neighbor_offsets[v + 1]; ++i)
+        if (pm.curvature.crease[i] == sign && v < pm.neighbors[i]) pairs.insert(pairs.end(), {v, pm.neighbors[i]});
+    if (pairs.empty()) continue;
+    tinygltf::Primitive primitive;
+    primitive.mode = TINYGLTF_MODE_LINE;
+    primitive.attributes["POSITION"] = position;
+    const std::size_t size = tinygltf::GetComponentSizeInBytes(index_component);
+    std::vector<unsigned char> bytes(pairs.size() * size);
+    for (std::size_t k = 0; k < pairs.size(); ++k) std::memcpy(&bytes[k * size], &pairs[k], size);  // little-endian
+    const int view = add_view(model, bytes.data(), bytes.size(), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    primitive.indices = add_accessor(model, view, index_component, TINYGLTF_TYPE_SCALAR, pairs.size());
+    primitive.extras = tinygltf::Value(tinygltf::Value::Object{{"crease", tinygltf::Value(sign)}});
+    mesh.primitives.push_back(primitive);
+  }
+}
+
 // glTF material colours are linear; the palette is sRGB (the sRGB transfer function, IEC 61966-2-1).
 double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); }
 
@@ -334,9 +363,14 @@ std::string prepared_mesh_to_compact_glb(const PreparedMesh& pm) {
   node.name = "surface";
   add_compact_vertices(model, primitive, node, pm);
   add_compact_indices(model, primitive, pm);
+  auto extras = primitive.extras.Get<tinygltf::Value::Object>();
+  extras["crease_angle"] = tinygltf::Value(pm.curvature.crease_angle);
+  extras["crease_edges"] = tinygltf::Value(int(pm.curvature.crease_edges));
+  primitive.extras = tinygltf::Value(std::move(extras));
   tinygltf::Mesh mesh;
   mesh.name = "surface";
   mesh.primitives.push_back(primitive);
+  add_crease_lines(model, mesh, pm);
   model.meshes.push_back(mesh);
   return write_single_mesh_glb(model, std::move(node));
 }

@@ -25,8 +25,11 @@ std::string feature_line_to_glb(const PreparedMesh& mesh, const std::vector<Feat
 /// primitive's extras; the attribute `_CURVATURE` is a VEC4 over the 8-byte vertex whose w is
 /// u, as an attribute at offset 6 would be unaligned), no normals, and indices of the smallest
 /// type that holds every vertex id. Vertex and triangle order are the prepared mesh's, so
-/// vertex i is the session's vertex i. About 38% of feature_line_to_glb's bytes before HTTP
-/// compression.
+/// vertex i is the session's vertex i. The prepared mesh's crease edges (curvature.crease, at
+/// the angle preparation chose from the noise) follow as LINES primitives over the same
+/// POSITION accessor, one per sign (extras `"crease": 1` convex, `-1` concave; none when it has
+/// no edge), and the surface primitive's extras carry `crease_angle` and `crease_edges`. About
+/// 38% of feature_line_to_glb's bytes before HTTP compression.
 std::string prepared_mesh_to_compact_glb(const PreparedMesh& mesh);
 
 /// The same document as glTF JSON with an embedded base64 buffer.

@@ -2,14 +2,18 @@
 // does (node translation and scale over the 16-bit integers), every position is within
 // 1/65535 of the bounding box per axis of the prepared mesh's, the curvature within 1/65535 of
 // its range, the triangles are the same corners in the same order, and the index type is the
-// smallest that holds the vertex ids.
+// smallest that holds the vertex ids. Its crease edges (LINES primitives over the same
+// positions, one per sign) are exactly the prepared mesh's crease marks.
 #include <gtest/gtest.h>
 #include <tiny_gltf.h>
 
 #include <cstring>
+#include <set>
+#include <tuple>
 
 #include "api/gltf_export.h"
 #include "engine/mesh_io.h"
+#include "tests/support/accuracy_meshes.h"
 #include "tests/support/shared_data.h"
 #include "tests/support/synthetic_meshes.h"
 
@@ -110,6 +114,79 @@ TEST(CompactGlb, SmallMeshFarFromTheOriginUsesByteIndices) {
 TEST(CompactGlb, FlatMeshWithMoreThan65534VerticesUses32BitIndices) {
   // A plane: z has no extent (scale 1, every z quantised to 0) and the ids need 32 bits.
   EXPECT_EQ(check_round_trip(testing::make_plane_grid(260, 0.2, 7)), TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);
+}
+
+// (lower vertex, higher vertex, sign) of every crease edge.
+using CreaseSet = std::set<std::tuple<std::uint32_t, std::uint32_t, int>>;
+
+CreaseSet marked_creases(const PreparedMesh& pm) {
+  CreaseSet out;
+  for (std::uint32_t v = 0; v < pm.n_vertices(); ++v)
+    for (std::uint32_t i = pm.neighbor_offsets[v]; i < pm.neighbor_offsets[v + 1]; ++i)
+      if (pm.curvature.crease[i] != 0 && v < pm.neighbors[i]) out.emplace(v, pm.neighbors[i], pm.curvature.crease[i]);
+  return out;
+}
+
+// The LINES primitives' edges with their "crease" sign; checks each shares the surface's positions.
+CreaseSet glb_creases(const tinygltf::Model& model, std::size_t* edge_count) {
+  const auto& primitives = model.meshes.at(model.nodes.at(0).mesh).primitives;
+  CreaseSet out;
+  *edge_count = 0;
+  for (std::size_t p = 1; p < primitives.size(); ++p) {
+    const auto& primitive = primitives[p];
+    EXPECT_EQ(primitive.mode, TINYGLTF_MODE_LINE);
+    EXPECT_EQ(primitive.attributes.at("POSITION"), primitives[0].attributes.at("POSITION"));
+    const int sign = primitive.extras.Get("crease").GetNumberAsInt();
+    const std::size_t count = model.accessors[primitive.indices].count;
+    EXPECT_EQ(count % 2, 0u);
+    for (std::size_t i = 0; i + 1 < count; i += 2) {
+      const auto a = std::uint32_t(read(model, primitive.indices, i)), b = std::uint32_t(read(model, primitive.indices, i + 1));
+      EXPECT_LT(a, b);
+      out.emplace(a, b, sign);
+      ++*edge_count;
+    }
+  }
+  return out;
+}
+
+void check_creases(RawMesh raw, std::size_t expected_at_least) {
+  const auto pm = prepare_mesh(std::move(raw));
+  const tinygltf::Model model = parse(prepared_mesh_to_compact_glb(*pm));
+  const auto& extras = model.meshes.at(0).primitives.at(0).extras;
+  EXPECT_EQ(std::size_t(extras.Get("crease_edges").GetNumberAsInt()), pm->curvature.crease_edges);
+  EXPECT_DOUBLE_EQ(extras.Get("crease_angle").GetNumberAsDouble(), pm->curvature.crease_angle);
+  std::size_t edges = 0;
+  const CreaseSet sent = glb_creases(model, &edges), marked = marked_creases(*pm);
+  EXPECT_EQ(edges, sent.size()) << "an edge sent twice";
+  EXPECT_EQ(sent, marked);
+  EXPECT_EQ(sent.size(), pm->curvature.crease_edges);
+  EXPECT_GE(sent.size(), expected_at_least);
+}
+
+TEST(CompactGlb, CreaseEdgesOfFandiskAreThePreparedMeshsMarksWithTheirSigns) {
+  check_creases(read_mesh_file(testing::require_shared_mesh("fandisk.off")), 100);
+}
+
+TEST(CompactGlb, CreaseEdgesOfACubeAreItsTwelveEdges) {
+  // 12 cube edges of 4 mesh edges each, all convex; the faces' diagonals are flat.
+  const auto pm = prepare_mesh(testing::make_subdivided_cube(4));
+  std::size_t edges = 0;
+  const CreaseSet sent = glb_creases(parse(prepared_mesh_to_compact_glb(*pm)), &edges);
+  EXPECT_EQ(sent.size(), 48u);
+  for (const auto& e : sent) EXPECT_EQ(std::get<2>(e), 1);
+  check_creases(testing::make_subdivided_cube(4), 48);
+}
+
+TEST(CompactGlb, NoisyCubeSendsTheCreasesOfTheAdaptiveAngleAndASmoothMeshNone) {
+  // Noise along every axis: preparation raises the crease angle above 30 degrees, and the
+  // edges sent are those it marked at that angle, not those past 30 degrees.
+  const RawMesh noisy = testing::with_noise(testing::make_subdivided_cube(12), 0.15, 3);
+  EXPECT_GT(prepare_mesh(noisy)->curvature.crease_angle, 30.0);
+  check_creases(noisy, 12 * 12 / 2);
+  const auto pm = prepare_mesh(testing::make_icosphere(1.0, 3));
+  const tinygltf::Model model = parse(prepared_mesh_to_compact_glb(*pm));
+  EXPECT_EQ(model.meshes.at(0).primitives.size(), 1u);
+  EXPECT_EQ(model.meshes.at(0).primitives[0].extras.Get("crease_edges").GetNumberAsInt(), 0);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #!/usr/bin/env node
 // The page's modules that need no browser, with known answers: 1-based numbering of server
-// text, the undo history, session files, vertex rings, snapping, sharp edges and the CAD and
+// text, the undo history, session files, vertex rings, snapping, the outline (the server's
+// creases and the boundary) and the CAD and
 // up-axis guesses on real meshes from ../shared/data/meshes, grid picking against testing
 // every triangle, typed vertex ids, and the page's line names put into the server's files.
 //   node --test tests/web/modules_test.mjs
@@ -9,7 +10,7 @@ import fs from 'node:fs';
 import path from 'node:path';
 import test from 'node:test';
 import { fileURLToPath } from 'node:url';
-import { guessUpAxis, looksLikeCad, ringNeighbourhood, sharpEdges, strongestFeatureVertex, vertexAdjacency } from '../../web/src/geometry.js';
+import { dihedralCreases, guessUpAxis, looksLikeCad, ringNeighbourhood, sharpEdges, strongestFeatureVertex, vertexAdjacency } from '../../web/src/geometry.js';
 import { History } from '../../web/src/history.js';
 import { nameCsvLines, nameGlbLines, nameObjLines, namePlyLines, objName } from '../../web/src/line_files.js';
 import { buildTriangleGrid, raycastAll, raycastGrid } from '../../web/src/raycast.js';
@@ -107,25 +108,35 @@ test('rings and snapping: the strongest feature within the accepted candidates',
   assert.equal(strongestFeatureVertex(0, ring, null), 0);
 });
 
-test('sharp edges: a fold past 30 degrees is one, a flat pair is not; boundaries are marked', () => {
-  const flat = sharpEdges(new Float32Array([0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0]), Uint32Array.from([0, 1, 2, 1, 3, 2]));
+test('sharp edges: the server\'s creases and the boundary; flat pairs counted', () => {
+  const square = new Float32Array([0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0]);
+  const flat = sharpEdges(square, Uint32Array.from([0, 1, 2, 1, 3, 2]));
   assert.equal(flat.creaseCount, 0);
   assert.equal(flat.flatShare, 1);
   assert.equal(flat.edges.length / 2, 4); // the four boundary edges
   assert.deepEqual([...flat.onBoundary], [1, 1, 1, 1]);
-  // Vertex 3 lifted out of the plane: the faces meet at 90 degrees along 1-2.
-  const folded = sharpEdges(new Float32Array([0, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 0.5, 0.7071]), Uint32Array.from([0, 1, 2, 1, 3, 2]));
+  // Vertex 3 lifted out of the plane: the faces meet at 90 degrees along 1-2, which the
+  // server marks as a crease; the page draws what the server sends, not an angle of its own.
+  const lifted = new Float32Array([0, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 0.5, 0.7071]);
+  const folded = sharpEdges(lifted, Uint32Array.from([0, 1, 2, 1, 3, 2]), Uint32Array.from([1, 2]));
   assert.equal(folded.creaseCount, 1);
+  assert.deepEqual([...folded.edges.slice(0, 2)], [1, 2]);
+  assert.equal(folded.edges.length / 2, 5);
   assert.equal(folded.flatShare, 0);
+  assert.equal(sharpEdges(lifted, Uint32Array.from([0, 1, 2, 1, 3, 2])).creaseCount, 0); // none sent, none drawn
+  // The page's own guess (only where the server marks none): past 30 degrees, not past 100.
+  assert.deepEqual([...dihedralCreases(lifted, Uint32Array.from([0, 1, 2, 1, 3, 2]), 30)], [1, 2]);
+  assert.deepEqual([...dihedralCreases(lifted, Uint32Array.from([0, 1, 2, 1, 3, 2]), 100)], []);
 });
 
 test('CAD and up axis on real meshes', () => {
   const fandisk = readOff(sharedMesh('fandisk.off'));
   const bunny = readOff(sharedMesh('bunny_closed.off'));
   const ridge = readOff(path.join(repo, 'samples', 'ridge_field.off'));
-  assert.equal(looksLikeCad(sharpEdges(fandisk.positions, fandisk.index), fandisk.index.length / 3), true);
-  assert.equal(looksLikeCad(sharpEdges(bunny.positions, bunny.index), bunny.index.length / 3), false);
-  assert.equal(looksLikeCad(sharpEdges(ridge.positions, ridge.index), ridge.index.length / 3), false);
+  const cad = (m) => looksLikeCad(sharpEdges(m.positions, m.index, dihedralCreases(m.positions, m.index, 30)), m.index.length / 3);
+  assert.equal(cad(fandisk), true);
+  assert.equal(cad(bunny), false);
+  assert.equal(cad(ridge), false);
   assert.equal(guessUpAxis(extent(bunny.positions), 'off'), 'y'); // the Stanford scan is Y-up
   assert.equal(guessUpAxis(extent(ridge.positions), 'off'), 'z'); // a height field z = f(x, y)
   assert.equal(guessUpAxis(extent(readOff(sharedMesh('hemisphere.off')).positions), 'off'), 'z');

@@ -233,3 +233,16 @@ export async function segmentationGlb(meshId, body) {
     throw new ApiError(response.status, 'no_glb', 'this server does not answer the segmented mesh as GLB');
   return response.blob();
 }
+
+// The bundled samples the server serves beside the page (web/build.mjs writes the list).
+export async function sampleList() {
+  const response = await fetch('samples/index.json');
+  if (!response.ok) throw new Error(`HTTP ${response.status}`);
+  return (await response.json()).samples;
+}
+
+export async function sampleBytes(file) {
+  const response = await fetch(file);
+  if (!response.ok) throw new Error(`HTTP ${response.status} for ${file}`);
+  return response.arrayBuffer();
+}

@@ -60,11 +60,34 @@ export function strongestFeatureVertex(clicked, candidates, field, accept = () =
   return best;
 }
 
-// Edges whose two faces meet at more than `angleDeg` (the crease outline of a CAD part), and
-// boundary edges. Returns them as a flat array of vertex pairs, the number of sharp interior
-// edges (creases), the share of interior edges whose faces are coplanar (within 1 degree), and
-// which vertices lie on the boundary.
-export function sharpEdges(positions, index, angleDeg = 30) {
+// Edges whose two faces' normals differ by more than `angleDeg`, as vertex pairs (lower id
+// first). The page's own guess, used only where the server marks no crease at all because the
+// angle it chose from the mesh exceeds every dihedral angle (a coarse box, whose creases are
+// most of its edges: see sharpEdges' caller in mesh_effects.js).
+export function dihedralCreases(positions, index, angleDeg = 30) {
+  const faceCount = index.length / 3;
+  const normals = faceNormals(positions, index);
+  const cosLimit = Math.cos((angleDeg * Math.PI) / 180);
+  const firstFace = new Map();
+  const pairs = [];
+  for (let f = 0; f < faceCount; ++f)
+    for (let k = 0; k < 3; ++k) {
+      const a = index[3 * f + k];
+      const b = index[3 * f + ((k + 1) % 3)];
+      const key = a < b ? a * 4294967296 + b : b * 4294967296 + a;
+      const g = firstFace.get(key);
+      if (g === undefined) {
+        firstFace.set(key, f);
+        continue;
+      }
+      firstFace.delete(key);
+      const cos = normals[3 * f] * normals[3 * g] + normals[3 * f + 1] * normals[3 * g + 1] + normals[3 * f + 2] * normals[3 * g + 2];
+      if (cos < cosLimit) pairs.push(Math.min(a, b), Math.max(a, b));
+    }
+  return Uint32Array.from(pairs);
+}
+
+function faceNormals(positions, index) {
   const faceCount = index.length / 3;
   const normals = new Float32Array(faceCount * 3);
   for (let f = 0; f < faceCount; ++f) {
@@ -85,11 +108,20 @@ export function sharpEdges(positions, index, angleDeg = 30) {
     normals[3 * f + 1] = ny / len;
     normals[3 * f + 2] = nz / len;
   }
-  const cosLimit = Math.cos((angleDeg * Math.PI) / 180);
+  return normals;
+}
+
+// The outline to draw: the server's crease edges (`creaseEdges`, vertex pairs from the compact
+// mesh download, at the angle the server chose from the mesh's noise: the creases the lines
+// follow) and the boundary edges. Returns the outline as a flat array of vertex pairs, the
+// number of creases, the share of interior edges whose faces are coplanar (within 1 degree),
+// and which vertices lie on the boundary.
+export function sharpEdges(positions, index, creaseEdges = new Uint32Array(0)) {
+  const faceCount = index.length / 3;
+  const normals = faceNormals(positions, index);
   const firstFace = new Map(); // edge key -> face, until its second face is seen
-  const edges = [];
+  const edges = [...creaseEdges];
   let interior = 0;
-  let creases = 0;
   let flat = 0;
   const cosFlat = Math.cos(Math.PI / 180);
   for (let f = 0; f < faceCount; ++f) {
@@ -106,7 +138,6 @@ export function sharpEdges(positions, index, angleDeg = 30) {
       const cos = normals[3 * f] * normals[3 * g] + normals[3 * f + 1] * normals[3 * g + 1] + normals[3 * f + 2] * normals[3 * g + 2];
       interior++;
       if (cos > cosFlat) flat++;
-      if (cos < cosLimit) edges.push(a, b), creases++;
     }
   }
   const onBoundary = new Uint8Array(positions.length / 3);
@@ -116,7 +147,7 @@ export function sharpEdges(positions, index, angleDeg = 30) {
     edges.push(a, b);
     onBoundary[a] = onBoundary[b] = 1;
   }
-  return { edges: Uint32Array.from(edges), creaseCount: creases, flatShare: interior ? flat / interior : 0, onBoundary };
+  return { edges: Uint32Array.from(edges), creaseCount: creaseEdges.length / 2, flatShare: interior ? flat / interior : 0, onBoundary };
 }
 
 // A CAD tessellation: many neighbouring faces are coplanar (a third of the edges, as on a cube

@@ -1,12 +1,8 @@
-// Keyboard shortcuts and the help overlay, and the toggles they share with the panel.
-import { $, confirmResolver, showMessage, state, viewer } from './app.js';
-import { activeLine, addLine, afterEdit, deleteSelectedKey, redo, restore, setClosed, undo } from './lines.js';
-import { saveSession } from './open_mesh.js';
-import { refresh } from './panel.js';
-import { pointer } from './picking.js';
-import { setTraceMode } from './trace.js';
+// Keyboard shortcuts and the help overlay, and the drawer of narrow windows. The shortcuts call
+// the actions, and `commands` for what is not state (files, the camera, a drag in progress).
+import { $, answerConfirm, confirmOpen } from './dom.js';
+import { activeLine } from './model.js';
 
-// ---- keyboard -----------------------------------------------------------------------------------------------
 export function typingInField(e) {
   const t = e.target;
   return t && (t.tagName === 'INPUT' || t.tagName === 'SELECT' || t.tagName === 'TEXTAREA' || t.isContentEditable) && t.type !== 'checkbox' && t.type !== 'radio';
@@ -15,92 +11,6 @@ export function typingInField(e) {
 export function toggleHelp(show = $('help').hidden) {
   $('help').hidden = !show;
   if (show) $('help-close').focus();
-}
-
-export function onKeyDown(e) {
-  const ctrl = e.ctrlKey || e.metaKey;
-  if (e.key === 'Escape') {
-    if (confirmResolver) return confirmResolver(false);
-    if (!$('help').hidden) return toggleHelp(false);
-    if (drawerOpen()) return toggleDrawer(false);
-    if (pointer.drag) {
-      // Cancel the drag: put the key back.
-      restore(pointer.drag.before);
-      pointer.drag = null;
-      pointer.press = null;
-      viewer.controls.enabled = true;
-      afterEdit();
-      return;
-    }
-    state.selectedKey = null;
-    refresh();
-    return;
-  }
-  if (confirmResolver) return;
-  if (ctrl && (e.key === 'z' || e.key === 'Z')) {
-    if (typingInField(e)) return; // the field's own undo
-    e.preventDefault();
-    return e.shiftKey ? redo() : undo();
-  }
-  if (ctrl && (e.key === 'y' || e.key === 'Y') && !typingInField(e)) {
-    e.preventDefault();
-    return redo();
-  }
-  if (ctrl && (e.key === 's' || e.key === 'S')) {
-    e.preventDefault();
-    return saveSession();
-  }
-  if (ctrl && (e.key === 'o' || e.key === 'O')) {
-    e.preventDefault();
-    return $('file-input').click();
-  }
-  if (ctrl || e.altKey || typingInField(e)) return;
-  const actions = {
-    Delete: deleteSelectedKey,
-    Backspace: deleteSelectedKey,
-    n: addLine,
-    c: () => setClosed(!activeLine()?.closed),
-    s: () => setSnapping(!state.snapping),
-    t: () => setTraceMode(!state.traceMode),
-    f: () => viewer.fitView(),
-    1: () => lookFrom('front'),
-    2: () => lookFrom('top'),
-    3: () => lookFrom('side'),
-    o: () => setOrthographic(!viewer.orthographic),
-    p: () => toggleDrawer(),
-    e: () => toggleEdges(),
-    '?': () => toggleHelp(),
-    h: () => toggleHelp(),
-  };
-  const action = actions[e.key];
-  if (!action) return;
-  if (e.target?.tagName === 'BUTTON' && (e.key === 'Enter' || e.key === ' ')) return;
-  e.preventDefault();
-  action();
-}
-
-export function setSnapping(on) {
-  state.snapping = on;
-  $('snap-toggle').checked = on;
-  showMessage(on ? 'Snapping on: a click places the key on the strongest feature vertex nearby.' : 'Snapping off: a click places the key on the vertex clicked.');
-}
-
-export function toggleEdges(on = !viewer.edgesShown) {
-  viewer.showEdges(on);
-  $('edges-toggle').checked = on;
-}
-
-const VIEW_NAMES = { front: 'the front', top: 'above', side: 'the right side' };
-
-export function lookFrom(name) {
-  if (!state.mesh) return showMessage('Open a mesh first.', { error: true });
-  if (viewer.viewFrom(name)) showMessage(`Looking from ${VIEW_NAMES[name]} (${state.upAxis === 'z' ? '+Z' : '+Y'} up); F frames the mesh as it opened.`);
-}
-
-export function setOrthographic(on) {
-  viewer.setOrthographic(on);
-  $('ortho-toggle').checked = on;
-  showMessage(on ? 'Orthographic projection: sizes no longer shrink with distance (O switches back).' : 'Perspective projection (O switches to orthographic).');
 }
 
 // Narrow windows show the panel as a drawer over the view (the width is style.css's).
@@ -114,4 +24,61 @@ export function toggleDrawer(open = !drawerOpen()) {
   $('panel-toggle').setAttribute('aria-expanded', String(open));
   if (open) $('panel').querySelector('#toolbar button')?.focus();
   else if (document.activeElement && $('panel').contains(document.activeElement)) $('panel-toggle').focus();
+}
+
+// commands: {saveSession, openFileChooser, cancelDrag, fitView, lookFrom(name), setTraceMode(on)}.
+export function createKeyboard(store, actions, commands) {
+  const state = store.state;
+  return function onKeyDown(e) {
+    const ctrl = e.ctrlKey || e.metaKey;
+    if (e.key === 'Escape') {
+      if (confirmOpen()) return answerConfirm(false);
+      if (!$('help').hidden) return toggleHelp(false);
+      if (drawerOpen()) return toggleDrawer(false);
+      if (commands.cancelDrag()) return; // the key goes back
+      actions.selectKey(null);
+      return;
+    }
+    if (confirmOpen()) return;
+    if (ctrl && (e.key === 'z' || e.key === 'Z')) {
+      if (typingInField(e)) return; // the field's own undo
+      e.preventDefault();
+      return e.shiftKey ? actions.redo() : actions.undo();
+    }
+    if (ctrl && (e.key === 'y' || e.key === 'Y') && !typingInField(e)) {
+      e.preventDefault();
+      return actions.redo();
+    }
+    if (ctrl && (e.key === 's' || e.key === 'S')) {
+      e.preventDefault();
+      return commands.saveSession();
+    }
+    if (ctrl && (e.key === 'o' || e.key === 'O')) {
+      e.preventDefault();
+      return commands.openFileChooser();
+    }
+    if (ctrl || e.altKey || typingInField(e)) return;
+    const keyActions = {
+      Delete: actions.deleteSelectedKey,
+      Backspace: actions.deleteSelectedKey,
+      n: actions.addLine,
+      c: () => actions.setClosed(!activeLine(state)?.closed),
+      s: () => actions.setSnapping(!state.snapping),
+      t: () => commands.setTraceMode(!state.traceMode),
+      f: () => commands.fitView(),
+      1: () => commands.lookFrom('front'),
+      2: () => commands.lookFrom('top'),
+      3: () => commands.lookFrom('side'),
+      o: () => actions.setOrthographic(!state.orthographic),
+      p: () => toggleDrawer(),
+      e: () => actions.setEdgesShown(),
+      '?': () => toggleHelp(),
+      h: () => toggleHelp(),
+    };
+    const action = keyActions[e.key];
+    if (!action) return;
+    if (e.target?.tagName === 'BUTTON' && (e.key === 'Enter' || e.key === ' ')) return;
+    e.preventDefault();
+    action();
+  };
 }

@@ -1,45 +1,100 @@
 // The Featureline page: open a mesh, place keys, see the initial and refined lines,
 // tune options, decompose the mesh along the lines, download the results; undo and redo every
 // edit, save and load the work as a session file.
+//
+// Wiring, and the only module that knows every other: one store (model.js, store.js), the
+// actions that edit it (actions.js), the effects that send requests from it (line_requests.js,
+// mesh_effects.js, segmentation.js, trace.js), the views that draw it (panel.js,
+// options_panel.js, segmentation_panel.js, viewer_view.js) and the controls that call the
+// actions (picking.js, keyboard.js, the listeners below).
 import * as THREE from 'three';
-import { $, history, showMessage, state, viewer } from './app.js';
+import * as httpApi from './api.js';
+import { createActions } from './actions.js';
 import { divergingCss } from './colors.js';
+import { $, confirmAction } from './dom.js';
+import { createDownloads } from './downloads.js';
 import { ringNeighbourhood } from './geometry.js';
-import { lookFrom, onKeyDown, setOrthographic, setSnapping, toggleDrawer, toggleEdges, toggleHelp } from './keyboard.js';
-import { addKeyById, addLine, clearKeys, idleWaiters, isStale, redo, setClosed, settleIdle, undo } from './lines.js';
-import { downloadLines, downloadSegmented, loadSamples, loadSessionFile, openFiles, openSample, renderMeshInfo, saveSession } from './open_mesh.js';
-import { loadOptionTables, optionsChanged } from './options_panel.js';
-import { applyColors, refresh, setUpAxis } from './panel.js';
-import { hoverFeedback, onDoubleClick, onPointerDown, onPointerMove, onPointerUp, pointer } from './picking.js';
-import { decompose, segmentationStale } from './segmentation_panel.js';
-import { clearTracePreview, setTraceMode } from './trace.js';
+import { createKeyboard, toggleDrawer, toggleHelp } from './keyboard.js';
+import { createLineRequests } from './line_requests.js';
+import { createMeshEffects } from './mesh_effects.js';
+import { colorMode, createPageStore, isStale, segmentationStale } from './model.js';
+import { createOptionsView } from './options_panel.js';
+import { createPanelView } from './panel.js';
+import { createPicking } from './picking.js';
+import { createSegmentation } from './segmentation.js';
+import { createSegmentationView } from './segmentation_panel.js';
+import { createTracing } from './trace.js';
+import { indexedMeshFromGltf, parseGlb, Viewer } from './viewer.js';
+import { createViewerView } from './viewer_view.js';
+
+const store = createPageStore({ search: location.search });
+const state = store.state;
+const actions = createActions(store);
+const viewer = new Viewer($('canvas-host'));
+const api = httpApi;
+
+let meshEffects = null;
+const lineRequests = createLineRequests(store, api, { onMeshGone: (reason) => meshEffects.recoverMesh(reason) });
+meshEffects = createMeshEffects(store, api, {
+  readMesh: async (bytes) => indexedMeshFromGltf(await parseGlb(bytes)),
+  confirm: confirmAction,
+  viewState: () => viewer.viewState(),
+  lineRequests,
+  afterFrame: (f) => requestAnimationFrame(f),
+});
+const segmentation = createSegmentation(store, api);
+const tracing = createTracing(store, api);
+const downloads = createDownloads(store, api, viewer, { recoverMesh: meshEffects.recoverMesh });
+
+createViewerView(store, viewer, { onError: (text) => actions.showMessage(text, { error: true }) });
+const panel = createPanelView(store, actions);
+createOptionsView(store, actions, api);
+const segmentsView = createSegmentationView(store);
+const picking = createPicking(store, actions, viewer, tracing);
+
+function setTraceMode(on) {
+  if (!on) tracing.clearPreview();
+  actions.setTraceMode(on);
+}
+
+const VIEW_NAMES = { front: 'the front', top: 'above', side: 'the right side' };
+function lookFrom(name) {
+  if (!state.mesh) return actions.showMessage('Open a mesh first.', { error: true });
+  if (viewer.viewFrom(name)) actions.showMessage(`Looking from ${VIEW_NAMES[name]} (${state.upAxis === 'z' ? '+Z' : '+Y'} up); F frames the mesh as it opened.`);
+}
+
+const onKeyDown = createKeyboard(store, actions, {
+  saveSession: downloads.saveSession,
+  openFileChooser: () => $('file-input').click(),
+  cancelDrag: picking.cancelDrag,
+  fitView: () => viewer.fitView(),
+  lookFrom,
+  setTraceMode,
+});
+
+function decompose() {
+  $('decompose-section').open = true;
+  segmentation.decompose($('decompose-mode').value);
+}
 
 // ---- wiring ------------------------------------------------------------------------------------------------
 function wire() {
   const host = $('canvas-host');
-  host.addEventListener('pointerdown', onPointerDown, { capture: true });
-  host.addEventListener('pointermove', onPointerMove);
-  host.addEventListener('dblclick', onDoubleClick);
-  host.addEventListener('pointerleave', () => {
-    $('readout').hidden = true;
-    viewer.setSnapPreview(null);
-    clearTracePreview();
-    if (pointer.drag || !viewer.hoverKey) return;
-    viewer.hoverKey = null;
-    viewer.canvas.style.cursor = '';
-    refresh();
-  });
-  window.addEventListener('pointerup', onPointerUp);
+  host.addEventListener('pointerdown', picking.onPointerDown, { capture: true });
+  host.addEventListener('pointermove', picking.onPointerMove);
+  host.addEventListener('dblclick', picking.onDoubleClick);
+  host.addEventListener('pointerleave', picking.onPointerLeave);
+  window.addEventListener('pointerup', picking.onPointerUp);
   window.addEventListener('keydown', onKeyDown);
   host.addEventListener('contextmenu', (e) => e.preventDefault());
 
   $('file-input').addEventListener('change', (e) => {
-    openFiles(e.target.files);
+    meshEffects.openFiles(e.target.files);
     e.target.value = '';
   });
   $('session-input').addEventListener('change', (e) => {
     const file = e.target.files?.[0];
-    if (file) loadSessionFile(file);
+    if (file) meshEffects.loadSessionFile(file);
     e.target.value = '';
   });
   // The drop zone is a keyboard control too: Enter or Space opens the file chooser.
@@ -65,51 +120,42 @@ function wire() {
     e.preventDefault();
     dragDepth = 0;
     document.body.classList.remove('dragging');
-    openFiles(e.dataTransfer?.files);
+    meshEffects.openFiles(e.dataTransfer?.files);
   });
 
-  $('sample-open').addEventListener('click', () => openSample($('sample-select').value));
-  $('curvature-toggle').addEventListener('change', () => {
-    if ($('curvature-toggle').checked) $('segments-toggle').checked = false;
-    applyColors();
-  });
-  $('segments-toggle').addEventListener('change', () => {
-    if ($('segments-toggle').checked) $('curvature-toggle').checked = false;
-    applyColors();
-  });
-  for (const el of document.querySelectorAll('input[name="up-axis"]')) el.addEventListener('change', () => setUpAxis(el.value));
-  $('flat-toggle').addEventListener('change', (e) => viewer.setFlatShading(e.target.checked));
-  $('edges-toggle').addEventListener('change', (e) => toggleEdges(e.target.checked));
-  $('snap-toggle').addEventListener('change', (e) => setSnapping(e.target.checked));
+  $('sample-open').addEventListener('click', () => meshEffects.openSample($('sample-select').value));
+  $('curvature-toggle').addEventListener('change', (e) => actions.setColorChoice(e.target.checked ? 'curvature' : 'plain'));
+  $('segments-toggle').addEventListener('change', (e) => actions.setColorChoice(e.target.checked ? 'segments' : 'plain'));
+  for (const el of document.querySelectorAll('input[name="up-axis"]')) el.addEventListener('change', () => actions.setUpAxis(el.value));
+  $('flat-toggle').addEventListener('change', (e) => actions.setFlatShading(e.target.checked));
+  $('edges-toggle').addEventListener('change', (e) => actions.setEdgesShown(e.target.checked));
+  $('snap-toggle').addEventListener('change', (e) => actions.setSnapping(e.target.checked));
   $('trace-toggle').addEventListener('change', (e) => setTraceMode(e.target.checked));
   $('reset-view').addEventListener('click', () => viewer.fitView());
   for (const name of ['front', 'top', 'side']) $(`view-${name}`).addEventListener('click', () => lookFrom(name));
-  $('ortho-toggle').addEventListener('change', (e) => setOrthographic(e.target.checked));
+  $('ortho-toggle').addEventListener('change', (e) => actions.setOrthographic(e.target.checked));
   $('panel-toggle').addEventListener('click', () => toggleDrawer());
   $('panel-close').addEventListener('click', () => toggleDrawer(false));
   $('key-by-id').addEventListener('submit', (e) => {
     e.preventDefault();
-    showKeyIdError(addKeyById($('key-vertex').value));
+    showKeyIdError(actions.addKeyById($('key-vertex').value));
   });
   $('key-vertex').addEventListener('input', () => showKeyIdError(''));
-  $('add-line').addEventListener('click', addLine);
-  $('toolbar-add-line').addEventListener('click', addLine);
-  $('clear-keys').addEventListener('click', clearKeys);
-  $('closed-toggle').addEventListener('change', (e) => setClosed(e.target.checked));
-  $('undo').addEventListener('click', undo);
-  $('redo').addEventListener('click', redo);
-  $('save-session').addEventListener('click', saveSession);
+  $('add-line').addEventListener('click', actions.addLine);
+  $('toolbar-add-line').addEventListener('click', actions.addLine);
+  $('clear-keys').addEventListener('click', actions.clearKeys);
+  $('closed-toggle').addEventListener('change', (e) => actions.setClosed(e.target.checked));
+  $('undo').addEventListener('click', actions.undo);
+  $('redo').addEventListener('click', actions.redo);
+  $('save-session').addEventListener('click', downloads.saveSession);
   $('load-session').addEventListener('click', () => $('session-input').click());
   $('help-button').addEventListener('click', () => toggleHelp());
   $('help-close').addEventListener('click', () => toggleHelp(false));
-  $('options-form').addEventListener('input', optionsChanged);
-  $('options-form').addEventListener('change', optionsChanged);
-  $('options-form').addEventListener('submit', (e) => e.preventDefault());
   $('decompose').addEventListener('click', decompose);
   $('toolbar-decompose').addEventListener('click', decompose);
-  $('download-json').addEventListener('click', () => downloadLines('json'));
-  for (const format of ['glb', 'obj', 'ply', 'polylines', 'csv']) $(`download-${format}`).addEventListener('click', () => downloadLines(format));
-  $('download-segmented').addEventListener('click', downloadSegmented);
+  $('download-json').addEventListener('click', () => downloads.downloadLines('json'));
+  for (const format of ['glb', 'obj', 'ply', 'polylines', 'csv']) $(`download-${format}`).addEventListener('click', () => downloads.downloadLines(format));
+  $('download-segmented').addEventListener('click', downloads.downloadSegmented);
   document.querySelector('#legend .legend-bar').style.background = divergingCss();
   // Small windows start with the long sections folded, so the lines stay in view.
   if (window.innerHeight < 800) $('options-section').open = false;
@@ -132,7 +178,7 @@ window.featureline = {
     return state.mesh ? { ...state.mesh } : null;
   },
   get lines() {
-    return state.lines.map((l) => ({ id: l.id, name: l.name, keys: [...l.keys], closed: l.closed, trace: l.trace, result: l.result, error: l.error, stale: isStale(l) }));
+    return state.lines.map((l) => ({ id: l.id, name: l.name, keys: [...l.keys], closed: l.closed, trace: l.trace, result: l.result, error: l.error, stale: isStale(l, state.options) }));
   },
   get activeLineId() {
     return state.activeLineId;
@@ -153,7 +199,7 @@ window.featureline = {
     return structuredClone(state.options);
   },
   get segmentation() {
-    return state.segmentation ? { faceColored: state.segmentation.faceColored, stale: segmentationStale(), ...state.segmentation.answer } : null;
+    return state.segmentation ? { faceColored: state.segmentation.faceColored, stale: segmentationStale(state), ...state.segmentation.answer } : null;
   },
   get decomposeMessage() {
     return state.decomposeMessage;
@@ -165,7 +211,7 @@ window.featureline = {
     return state.samples;
   },
   get colorMode() {
-    return state.colorMode;
+    return colorMode(state);
   },
   get uploadProgress() {
     return state.uploadProgress;
@@ -193,15 +239,16 @@ window.featureline = {
   },
   // Trace previews asked of the server so far (hovering), and whether one is drawn.
   get previewRequests() {
-    return state.previewRequests ?? 0;
+    return state.previewRequests;
   },
   get previewLatencyMs() {
-    return state.previewLatencyMs ?? null;
+    return state.previewLatencyMs;
   },
   get selectedKey() {
     return state.selectedKey;
   },
   get history() {
+    const { history } = store;
     return { canUndo: history.canUndo, canRedo: history.canRedo, undo: history.undoLabel, redo: history.redoLabel, depth: history.undoStack.length };
   },
   get pendingSession() {
@@ -214,14 +261,10 @@ window.featureline = {
     return state.adjacency ? [...new Set(ringNeighbourhood(state.adjacency, v, 1))].filter((w) => w !== v) : [];
   },
   // Resolves when no request is running or waiting.
-  idle() {
-    return new Promise((resolve) => {
-      idleWaiters.push(resolve);
-      settleIdle();
-    });
-  },
+  idle: () => lineRequests.idle(),
   // Client coordinates of a vertex on screen (to click or drag it in tests).
   screenPositionOfVertex(v) {
+    store.flush();
     viewer.render();
     const p = viewer.toClient(viewer.vertexPosition(v));
     return { x: p.x, y: p.y };
@@ -232,7 +275,8 @@ window.featureline = {
   // What one pointer move over the mesh does (pick, snap, read-out, preview), and the face
   // three.js's own raycast (every triangle) finds there: tests time both and compare.
   hoverAt(x, y) {
-    hoverFeedback(x, y);
+    picking.hoverFeedback(x, y);
+    store.flush();
     return $('readout').hidden ? null : $('readout').textContent;
   },
   threeRaycastAt: (x, y) => viewer.pickFaceWithThree(x, y),
@@ -243,6 +287,7 @@ window.featureline = {
     return sphere ? { center: sphere.center.toArray(), radius: sphere.radius } : null;
   },
   toClient(points) {
+    store.flush();
     viewer.render();
     return points.map((p) => {
       const c = viewer.toClient(new THREE.Vector3(...p));
@@ -252,14 +297,13 @@ window.featureline = {
   get view() {
     return viewer.viewState();
   },
-  sceneStats: () => viewer.sceneStats(),
+  sceneStats: () => (store.flush(), viewer.sceneStats()),
   surfaceLayerDifference: () => viewer.surfaceLayerDifference(),
   probe: () => viewer.probe(),
 };
 
 wire();
-loadOptionTables();
-renderMeshInfo();
-refresh();
-showMessage('Open a bundled sample, or drop a mesh file anywhere on the page (? for help).');
-loadSamples();
+panel.render();
+segmentsView.render();
+actions.showMessage('Open a bundled sample, or drop a mesh file anywhere on the page (? for help).');
+meshEffects.loadSamples();

@@ -1,8 +1,7 @@
-// The options form: limits and tooltips from the server's option tables, edits as history steps.
-import * as api from './api.js';
-import { $, state } from './app.js';
-import { edit } from './lines.js';
-import { refresh } from './panel.js';
+// The options form as a view of the state: its limits and tooltips from the server's option
+// tables; what is typed goes to the setOptions action (an undo step), and the form shows the
+// state's options when they change otherwise (undo, redo, a loaded session).
+import { $ } from './dom.js';
 
 // ---- options -----------------------------------------------------------------------------------------
 export function readOptions() {
@@ -55,14 +54,6 @@ export function applyOptionTables(tables) {
   }
 }
 
-export async function loadOptionTables() {
-  try {
-    applyOptionTables(await api.optionTables());
-  } catch (e) {
-    console.warn('option tables unavailable; the server checks the options', e);
-  }
-}
-
 // The form shows `options` (undo, redo, a loaded session).
 export function writeOptionsForm(options) {
   for (const el of $('options-form').elements) {
@@ -71,22 +62,36 @@ export function writeOptionsForm(options) {
     for (const p of el.name.split('.')) v = v?.[p];
     el.value = v === undefined || v === null ? '' : String(v);
   }
-  $('options-error').hidden = true;
-  state.optionsValid = true;
 }
 
-export let optionsTimer = 0;
-export function optionsChanged() {
-  clearTimeout(optionsTimer);
-  optionsTimer = setTimeout(() => {
-    const { options, problems } = readOptions();
-    $('options-error').hidden = problems.length === 0;
-    $('options-error').textContent = problems.join('\n');
-    state.optionsValid = problems.length === 0;
-    if (!state.optionsValid) return refresh();
-    if (JSON.stringify(options) === JSON.stringify(state.options)) return;
-    edit('change options', () => {
-      state.options = options;
-    });
-  }, 250);
+// api: optionTables() (GET /v1/options).
+export function createOptionsView(store, actions, api) {
+  let shown = store.state.options;
+  let timer = 0;
+
+  function changed() {
+    clearTimeout(timer);
+    timer = setTimeout(() => {
+      const { options, problems } = readOptions();
+      actions.setOptions(options, problems);
+    }, 250);
+  }
+
+  function render(state) {
+    $('options-error').hidden = state.optionsProblems.length === 0;
+    $('options-error').textContent = state.optionsProblems.join('\n');
+    if (state.options === shown) return;
+    shown = state.options;
+    // Typed options are already in the form; others (undo, a session) are written into it.
+    if (JSON.stringify(readOptions().options) !== JSON.stringify(state.options)) writeOptionsForm(state.options);
+  }
+
+  $('options-form').addEventListener('input', changed);
+  $('options-form').addEventListener('change', changed);
+  $('options-form').addEventListener('submit', (e) => e.preventDefault());
+  store.subscribe(render);
+  api
+    .optionTables()
+    .then(applyOptionTables)
+    .catch((e) => console.warn('option tables unavailable; the server checks the options', e));
 }

@@ -31,3 +31,20 @@ export function vertexIdProblem(text, vertexCount, line) {
   if (line?.keys.length && line.keys[line.keys.length - 1] === v) return `vertex ${v} is already the last key of ${line.name}`;
   return '';
 }
+
+// Server text about lines, keys and segments, counted from 1 as the page counts.
+export function serverText(e) {
+  return oneBasedNumbers(typeof e === 'string' ? e : errorText(e));
+}
+
+export function formatBytes(n) {
+  if (n < 1024) return `${n} B`;
+  if (n < 1024 * 1024) return `${(n / 1024).toFixed(1)} KiB`;
+  return `${(n / 1024 / 1024).toFixed(1)} MiB`;
+}
+
+export function num(x, digits = 4) {
+  if (typeof x !== 'number' || !Number.isFinite(x)) return String(x);
+  if (x !== 0 && (Math.abs(x) >= 1e5 || Math.abs(x) < 1e-3)) return x.toExponential(2);
+  return Number(x.toPrecision(digits)).toString();
+}

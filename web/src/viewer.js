@@ -8,6 +8,7 @@ import { GLTFExporter } from 'three/addons/exporters/GLTFExporter.js';
 import { Line2 } from 'three/addons/lines/Line2.js';
 import { LineMaterial } from 'three/addons/lines/LineMaterial.js';
 import { LineGeometry } from 'three/addons/lines/LineGeometry.js';
+import { segmentColor } from './model.js';
 import { buildTriangleGrid, raycastGrid } from './raycast.js';
 import { SurfaceLayer } from './surface_layer.js';
 
@@ -64,6 +65,18 @@ export function segmentedSurface(vertices, faces, labels, colorOf) {
   return group;
 }
 
+// The segmented surface of an answer as three.js objects: the remeshed surface it carries
+// (remesh mode), or the mesh with the answer's labels (snap mode); null when it carries neither.
+export function segmentedObject(seg, mesh) {
+  const { answer } = seg;
+  const colorOf = (label) => segmentColor(seg, label);
+  const remeshed = answer.remeshed;
+  if (Array.isArray(remeshed?.vertices) && Array.isArray(remeshed?.faces))
+    return segmentedSurface(remeshed.vertices.flat(), remeshed.faces.flat(), answer.labels, colorOf);
+  if (seg.faceColored && mesh) return segmentedSurface(mesh.positions, mesh.index, answer.labels, colorOf);
+  return null;
+}
+
 // The object as a GLB (ArrayBuffer), written in the page: what is shown is what is saved.
 export function exportGlb(object) {
   return new GLTFExporter().parseAsync(object, { binary: true });
@@ -80,7 +93,9 @@ export function parseGlb(arrayBuffer) {
 // Quantised positions (KHR_mesh_quantization: integers the node's transform maps back) are
 // read as numbers and transformed here: three.js would write a transformed float back into
 // the integer array. Normals are computed (the compact GLB has none); a `_CURVATURE`
-// attribute with `curvature_offset`/`curvature_scale` extras comes back as `curvature`.
+// attribute with `curvature_offset`/`curvature_scale` extras comes back as `curvature`, the
+// server's crease edges as `creaseEdges` (vertex pairs) and the angle it marked them at as
+// `creaseAngle` (null from a server that sends none).
 export function indexedMeshFromGltf(gltf) {
   let found = null;
   gltf.scene.updateMatrixWorld(true);
@@ -106,7 +121,17 @@ export function indexedMeshFromGltf(gltf) {
   g.computeVertexNormals();
   const normals = new Float32Array(g.attributes.normal.array);
   g.dispose();
-  return { positions, normals, index, vertexCount: n, faceCount: index.length / 3, curvature: quantisedCurvature(source) };
+  return { positions, normals, index, vertexCount: n, faceCount: index.length / 3, curvature: quantisedCurvature(source), creaseEdges: creaseEdges(gltf.scene), creaseAngle: source.userData?.crease_angle ?? null };
+}
+
+// The server's crease edges as vertex pairs: the compact GLB's LINES primitives whose extras
+// say `crease` (api/gltf_export.h), over the surface's vertices.
+function creaseEdges(scene) {
+  const pairs = [];
+  scene.traverse((o) => {
+    if (o.isLineSegments && o.geometry?.userData?.crease && o.geometry.index) pairs.push(...o.geometry.index.array);
+  });
+  return Uint32Array.from(pairs);
 }
 
 // value = offset + scale * u for the normalised u in [0, 1], the w of the compact GLB's VEC4
