@@ -38,6 +38,10 @@ constexpr double kCreaseResidualShare = 0.75;
 // is 0.67 of it), the noise taken as at least kCleanNoise local edge lengths.
 constexpr double kResidualPerNoise = 1.5;
 constexpr double kCleanNoise = 0.01;
+// A sharp bend of the surface line: it turns by more than this (radians) between its directions
+// over the edge before and the edge after a point. bench_accuracy's rounded slab turns 22.5
+// degrees at each of the 4 vertices of a corner arc; a ring of radius 13 edges 4.4 per edge.
+constexpr double kSharpBend = 15 * M_PI / 180;
 // A corner's point weighs this much more than others, so the spline pieces meet there.
 constexpr double kCornerWeight = 1e3;
 
@@ -610,6 +614,33 @@ void check_fitted_curve_options(const FittedCurveOptions& o) {
   check_in_range(F::corner_angle_range, o.corner_angle, "fitted.corner_angle");
 }
 
+namespace {
+
+// Stations within `radius` edges of a sharp bend of the surface line (a CAD part's tight rounded
+// corner): there no side is one smooth sheet over the fit's neighbourhood and the fits cut inside
+// the bend, so the line's own point is kept. The bends are read off the line smoothed by the
+// spline, so a line zig-zagging along edges across a straight crease has none.
+std::vector<char> sharp_bends_within(const std::vector<Station>& st, bool closed, double length, double spacing,
+                                     const FittedCurveOptions& o) {
+  const std::size_t n = st.size(), reach = std::size_t(std::lround(o.radius / kStationSpacing));
+  std::vector<Eigen::Vector3d> line(n);
+  std::vector<double> u(n), w(n, 1.0);
+  for (std::size_t i = 0; i < n; ++i) line[i] = st[i].p, u[i] = st[i].u;
+  std::size_t controls = 0;
+  const std::vector<double> turn = turns(fit_pspline(u, line, w, closed ? length : 0, spacing, o.smoothing, controls), closed, 1);
+  std::vector<char> near(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (turn[i] <= kSharpBend) continue;
+    for (std::size_t j = 0; j <= reach && j < n; ++j) {
+      if (closed || i + j < n) near[(i + j) % n] = 1;
+      if (closed || i >= j) near[(i + n - j) % n] = 1;
+    }
+  }
+  return near;
+}
+
+}  // namespace
+
 FittedCurveResult fit_feature_curve(const PreparedMesh& pm, const FittedCurveLine& line, const FittedCurveOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   check_fitted_curve_options(options);
@@ -628,13 +659,16 @@ FittedCurveResult fit_feature_curve(const PreparedMesh& pm, const FittedCurveLin
   std::vector<Eigen::Vector3d> q(stations.size());
   std::vector<Source> sources(stations.size());
   std::size_t counts[4] = {0, 0, 0, 0};
+  const double spacing = options.control_spacing * unit;
+  const std::vector<char> bent = sharp_bends_within(stations, result.closed, length, spacing, options);
   for (std::size_t i = 0; i < stations.size(); ++i) {
-    const auto [point, source] = station_point(pm, ball, stations, i, result.closed, line.feature_sign, options);
+    const auto [point, source] = bent[i] && !stations[i].exact
+                                     ? std::pair{stations[i].p, Source::line}
+                                     : station_point(pm, ball, stations, i, result.closed, line.feature_sign, options);
     q[i] = point;
     sources[i] = source;
     ++counts[int(source)];
   }
-  const double spacing = options.control_spacing * unit;
   result.points = smooth_points(stations, std::move(q), result.closed, length, spacing, options, result);
   // An exact crease run is the feature, and where the fits were refused the surface line is the
   // best estimate there is: the curve keeps the line's points rather than the spline's rounding
