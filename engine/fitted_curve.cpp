@@ -15,8 +15,8 @@
 namespace featureline {
 namespace {
 
-// Stations (the points the fits are made at) are this far apart along the line, in its mean
-// local edge length: two per edge, so each control interval holds several fitted points.
+// Stations (the points the fits are made at) are this far apart along the line, in its edge
+// length (FittedCurveLine::edge_length): two per edge, so each control interval holds several.
 constexpr double kStationSpacing = 0.5;
 // Vertices closer than this to the line (local edge lengths) are left out of the first side
 // fits: the surface line may lie that far off the true crease.
@@ -43,7 +43,8 @@ constexpr double kCleanNoise = 0.01;
 // degrees at each of the 4 vertices of a corner arc; a ring of radius 13 edges 4.4 per edge.
 constexpr double kSharpBend = 15 * M_PI / 180;
 // The distance between a crease point and the line's (in units of the noise estimate) at which
-// the point moves three quarters of the way from the mean of the two to the crease point.
+// the blended point lies three quarters of the way from the line's point to the crease point
+// (half way when they coincide, all the way when they lie far apart).
 constexpr double kBlendNoise = 4.0;
 // A corner's point weighs this much more than others, so the spline pieces meet there.
 constexpr double kCornerWeight = 1e3;
