@@ -47,6 +47,15 @@ std::vector<std::vector<Eigen::Vector3d>> points_of(const std::vector<FeatureLin
   return points;
 }
 
+// A line's fitted curve when it has one of two points or more (FeatureLineResult::fitted).
+const FittedCurveResult* fitted_of(const FeatureLineResult& line) {
+  return line.fitted && line.fitted->points.size() >= 2 ? &*line.fitted : nullptr;
+}
+
+bool any_fitted(const std::vector<FeatureLineResult>& lines) {
+  return std::any_of(lines.begin(), lines.end(), [](const FeatureLineResult& l) { return fitted_of(l) != nullptr; });
+}
+
 void check_labels(const SegmentedSurface& surface, const SegmentationResult& result) {
   if (result.labels.size() != surface.triangles.size())
     throw InvalidInputError("the segmentation has " + std::to_string(result.labels.size()) + " labels for " +
@@ -143,32 +152,60 @@ std::string lines_to_obj(const std::vector<FeatureLineResult>& lines) {
     if (lines[i].closed) out += ' ' + std::to_string(first);
     out += '\n';
     first += points[i].size();
+    if (const FittedCurveResult* fitted = fitted_of(lines[i])) {
+      out += "o line_" + std::to_string(i) + "_fitted\n";
+      for (const auto& p : fitted->points) {
+        out += 'v';
+        append_point(out, p);
+        out += '\n';
+      }
+      out += 'l';
+      for (std::size_t k = 0; k < fitted->points.size(); ++k) out += ' ' + std::to_string(first + k);
+      if (fitted->closed) out += ' ' + std::to_string(first);
+      out += '\n';
+      first += fitted->points.size();
+    }
   }
   return out;
 }
 
 std::string lines_to_ply(const std::vector<FeatureLineResult>& lines) {
   const auto points = points_of(lines);
-  std::size_t vertices = 0, edges = 0;
+  // Each line's refined points, then its fitted curve's when it has one (edges marked fitted).
+  struct Polyline {
+    const std::vector<Eigen::Vector3d>* points;
+    bool closed;
+    std::size_t line;
+    bool fitted;
+  };
+  std::vector<Polyline> polylines;
   for (std::size_t i = 0; i < lines.size(); ++i) {
-    vertices += points[i].size();
-    edges += points[i].size() - (lines[i].closed ? 0 : 1);
+    polylines.push_back({&points[i], lines[i].closed, i, false});
+    if (const FittedCurveResult* fitted = fitted_of(lines[i])) polylines.push_back({&fitted->points, fitted->closed, i, true});
+  }
+  const bool marked = any_fitted(lines);
+  std::size_t vertices = 0, edges = 0;
+  for (const auto& p : polylines) {
+    vertices += p.points->size();
+    edges += p.points->size() - (p.closed ? 0 : 1);
   }
   std::string out = "ply\nformat ascii 1.0\ncomment Featureline: " + std::to_string(lines.size()) +
                     " feature lines\nelement vertex " + std::to_string(vertices) +
                     "\nproperty double x\nproperty double y\nproperty double z\nelement edge " + std::to_string(edges) +
-                    "\nproperty int vertex1\nproperty int vertex2\nproperty int line\nend_header\n";
-  for (const auto& line : points)
-    for (const auto& p : line) {
-      append_coordinates(out, p);
+                    "\nproperty int vertex1\nproperty int vertex2\nproperty int line\n" +
+                    (marked ? "property uchar fitted\n" : "") + "end_header\n";
+  for (const auto& p : polylines)
+    for (const auto& x : *p.points) {
+      append_coordinates(out, x);
       out += '\n';
     }
   std::size_t first = 0;
-  for (std::size_t i = 0; i < lines.size(); ++i) {
-    const std::size_t n = points[i].size();
-    const std::size_t count = lines[i].closed ? n : n - 1;
+  for (const auto& p : polylines) {
+    const std::size_t n = p.points->size();
+    const std::size_t count = p.closed ? n : n - 1;
     for (std::size_t k = 0; k < count; ++k)
-      out += std::to_string(first + k) + ' ' + std::to_string(first + (k + 1) % n) + ' ' + std::to_string(i) + '\n';
+      out += std::to_string(first + k) + ' ' + std::to_string(first + (k + 1) % n) + ' ' + std::to_string(p.line) +
+             (marked ? (p.fitted ? " 1" : " 0") : "") + '\n';
     first += n;
   }
   return out;
@@ -182,12 +219,20 @@ std::string lines_to_polylines(const std::vector<FeatureLineResult>& lines) {
     for (const auto& p : points[i]) append_point(out, p);
     if (lines[i].closed) append_point(out, points[i].front());
     out += '\n';
+    if (const FittedCurveResult* fitted = fitted_of(lines[i])) {
+      out += std::to_string(fitted->points.size() + (fitted->closed ? 1 : 0));
+      for (const auto& p : fitted->points) append_point(out, p);
+      if (fitted->closed) append_point(out, fitted->points.front());
+      out += '\n';
+    }
   }
   return out;
 }
 
 std::string lines_to_csv(const std::vector<FeatureLineResult>& lines) {
-  std::string out = "line,closed,point,x,y,z,face,b0,b1,b2\n";
+  // With fitted curves a last column says which curve a row is on; fitted points lie on no face.
+  const bool marked = any_fitted(lines);
+  std::string out = marked ? "line,closed,point,x,y,z,face,b0,b1,b2,curve\n" : "line,closed,point,x,y,z,face,b0,b1,b2\n";
   for (std::size_t i = 0; i < lines.size(); ++i) {
     export_line_points(lines[i], i);  // the same check as the other formats: two points at least
     for (std::size_t k = 0; k < lines[i].refined.size(); ++k) {
@@ -196,7 +241,14 @@ std::string lines_to_csv(const std::vector<FeatureLineResult>& lines) {
       for (double x : {p.position.x(), p.position.y(), p.position.z()}) out += ',', append_number(out, x);
       out += ',' + std::to_string(p.face);
       for (double b : p.barycentric) out += ',', append_number(out, b);
-      out += '\n';
+      out += marked ? ",refined\n" : "\n";
+    }
+    const FittedCurveResult* fitted = fitted_of(lines[i]);
+    if (!fitted) continue;
+    for (std::size_t k = 0; k < fitted->points.size(); ++k) {
+      out += std::to_string(i) + (fitted->closed ? ",true," : ",false,") + std::to_string(k);
+      for (double x : {fitted->points[k].x(), fitted->points[k].y(), fitted->points[k].z()}) out += ',', append_number(out, x);
+      out += ",,,,,fitted\n";
     }
   }
   return out;

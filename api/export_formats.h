@@ -95,26 +95,31 @@ std::string export_format_extensions(ExportContent content);
 std::vector<Eigen::Vector3d> export_line_points(const FeatureLineResult& line, std::size_t index);
 
 /// Wavefront OBJ: per line `o line_<n>`, its points as `v x y z`, then one `l i j ...` record
-/// (1-based ids over the whole file; a closed line repeats its first id at the end).
+/// (1-based ids over the whole file; a closed line repeats its first id at the end); a line with
+/// a fitted curve (FeatureLineResult::fitted) is followed by `o line_<n>_fitted` and the curve.
 /// \throw InvalidInputError for no lines or a line with fewer than two points.
 std::string lines_to_obj(const std::vector<FeatureLineResult>& lines);
 
 /// ASCII PLY: `element vertex` (double x, y, z; every line's points, line after line) and
 /// `element edge` (int vertex1, vertex2, and int line, the line's index): consecutive points,
-/// and for a closed line the edge from its last point back to its first.
+/// and for a closed line the edge from its last point back to its first. When a line has a fitted
+/// curve, its points follow the line's and every edge gets `uchar fitted` (1 on fitted curves).
 /// \throw InvalidInputError for no lines or a line with fewer than two points.
 std::string lines_to_ply(const std::vector<FeatureLineResult>& lines);
 
 /// CGAL's polylines text (read by CGAL::IO::read_polylines, Mesh_3's feature input): one text
 /// line per polyline, "N x1 y1 z1 ... xN yN zN"; a closed polyline repeats its first point at
-/// the end, as CGAL writes closed polylines.
+/// the end, as CGAL writes closed polylines. A line's fitted curve, when it has one, is the text
+/// line after it.
 /// \throw InvalidInputError for no lines or a line with fewer than two points.
 std::string lines_to_polylines(const std::vector<FeatureLineResult>& lines);
 
 /// CSV with a header row, then one row per refined point of each line: `line` (0-based, the
 /// request's order), `closed` (true/false: a loop does not repeat its first point), `point`
 /// (0-based along the line), x, y, z, `face` and b0, b1, b2 (barycentric coordinates in that
-/// face's corner order). \throw InvalidInputError for a line with fewer than two points
+/// face's corner order). When a line has a fitted curve, a last column `curve` says `refined` or
+/// `fitted`, and the fitted curve's rows follow its line's with face and barycentric empty (the
+/// curve may leave the surface). \throw InvalidInputError for a line with fewer than two points
 std::string lines_to_csv(const std::vector<FeatureLineResult>& lines);
 
 /// The labelled surface of a segmentation: in remesh mode the result's own positions and

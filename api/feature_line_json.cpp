@@ -20,6 +20,23 @@ json trace_json(const TraceResult& t) {
           {"seed_strength", t.seed_strength}, {"steps", t.steps}, {"ms", t.elapsed_ms}};
 }
 
+json fitted_json(const FittedCurveResult& f) {
+  json points = json::array();
+  for (const auto& p : f.points) points.push_back(point_json(p));
+  return {{"points", points},
+          {"closed", f.closed},
+          {"length", f.length},
+          {"control_points", f.control_points},
+          {"control_spacing", f.control_spacing},
+          {"control_points_per_unit_length", f.control_spacing > 0 ? 1 / f.control_spacing : 0.0},
+          {"corners", f.corners},
+          {"crease_share", f.crease_share},
+          {"surface_share", f.surface_share},
+          {"exact_share", f.exact_share},
+          {"fallback_share", f.fallback_share},
+          {"ms", f.elapsed_ms}};
+}
+
 }  // namespace
 
 void apply_options_json(const json& j, FeatureLineOptions& o) { apply_options(feature_line_option_table(), j, "options", o); }
@@ -83,6 +100,7 @@ json feature_line_to_json(const FeatureLineResult& r) {
           {"total", r.timings.total_ms}}}}},
   };
   if (r.trace) answer["trace"] = trace_json(*r.trace);
+  if (r.fitted) answer["fitted"] = fitted_json(*r.fitted);
   return answer;
 }
 

@@ -16,7 +16,8 @@ void apply_options_json(const nlohmann::json& json, FeatureLineOptions& options)
 /// The options as JSON (every field, defaults included).
 nlohmann::json options_to_json(const FeatureLineOptions& options);
 
-/// The feature-line answer: keys, closed, initial, refined, stats (field names are the contract).
+/// The feature-line answer: keys, closed, initial, refined, stats, and `fitted` when the line has
+/// a fitted curve (field names are the contract).
 /// stats.pieces_detail has one object per FeatureLineResult::piece_reports entry, in line order;
 /// its "reason" is always present and empty unless the piece kept its initial line.
 /// stats.iteration_caps counts the pieces whose snake stopped at its iteration cap.

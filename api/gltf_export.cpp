@@ -72,6 +72,17 @@ void add_line(tinygltf::Model& model, tinygltf::Mesh& mesh, const std::vector<Ei
   mesh.primitives.push_back(primitive);
 }
 
+// A mesh of line primitives under a node of the same name in the scene; nothing when it has none.
+void add_line_node(tinygltf::Model& model, tinygltf::Scene& scene, tinygltf::Mesh mesh) {
+  if (mesh.primitives.empty()) return;
+  tinygltf::Node node;
+  node.name = mesh.name;
+  model.meshes.push_back(std::move(mesh));
+  node.mesh = int(model.meshes.size() - 1);
+  model.nodes.push_back(node);
+  scene.nodes.push_back(int(model.nodes.size() - 1));
+}
+
 tinygltf::Model build_model(const PreparedMesh& pm, const std::vector<FeatureLineResult>& results, bool include_mesh) {
   tinygltf::Model model;
   model.asset.version = "2.0";
@@ -128,13 +139,14 @@ tinygltf::Model build_model(const PreparedMesh& pm, const std::vector<FeatureLin
     std::vector<Eigen::Vector3d> refined;
     for (const auto& p : r.refined) refined.push_back(p.position);
     add_line(model, mesh, refined, r.closed, {0, 200, 255, 255});
-    if (mesh.primitives.empty()) continue;
-    model.meshes.push_back(mesh);
-    tinygltf::Node node;
-    node.name = mesh.name;
-    node.mesh = int(model.meshes.size() - 1);
-    model.nodes.push_back(node);
-    scene.nodes.push_back(int(model.nodes.size() - 1));
+    add_line_node(model, scene, std::move(mesh));
+    if (r.fitted) {
+      // Its own node, so a viewer can hide it: it may leave the surface, the other two do not.
+      tinygltf::Mesh fitted;
+      fitted.name = "fitted_curve_" + std::to_string(i);
+      add_line(model, fitted, r.fitted->points, r.fitted->closed, {255, 0, 200, 255});
+      add_line_node(model, scene, std::move(fitted));
+    }
   }
   if (model.buffers[0].data.empty()) throw InvalidInputError("nothing to write: no mesh and no line");
   model.buffers[0].data.resize((model.buffers[0].data.size() + 3) / 4 * 4, 0);

@@ -14,7 +14,8 @@ namespace featureline {
 /// feature field, the dominant signed principal curvature, as the custom vertex attribute
 /// _CURVATURE), and for every result its initial line (orange) and refined line (cyan) as
 /// LINE_STRIP primitives (LINE_LOOP for closed lines) with COLOR_0 as normalised RGBA8 (linear
-/// colour, as glTF requires).
+/// colour, as glTF requires), under a node "feature_line_<i>"; a result with a fitted curve
+/// (FeatureLineResult::fitted) also gets it, magenta, under a node of its own "fitted_curve_<i>".
 std::string feature_line_to_glb(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& results, bool include_mesh);
 
 /// The mesh alone in a compact GLB for downloads (KHR_mesh_quantization, required): positions as

@@ -184,6 +184,26 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "across the line (strip edge lengths)", "", &O::crest, &CrestOptions::max_shift),
       option<O>("crest.smoothing_passes", within(CrestOptions::smoothing_passes_range), "Crest localisation: (1, 2, 1)/4 "
                 "passes over the moves along the line", "", &O::crest, &CrestOptions::smoothing_passes),
+      option<O>("fitted.enabled", {}, "Also answer a smooth space curve fitted to the line's neighbourhood (crease sides "
+                "intersected, a smoothing spline), allowed to leave the noisy surface", "--fitted", &O::fitted,
+                &FittedCurveOptions::enabled),
+      option<O>("fitted.radius", within(FittedCurveOptions::radius_range), "Fitted curve: radius of the neighbourhood "
+                "fitted around each point of the line (local edge lengths)", "", &O::fitted, &FittedCurveOptions::radius),
+      option<O>("fitted.control_spacing", within(FittedCurveOptions::control_spacing_range), "Fitted curve: distance "
+                "between the spline's control points (the line's mean local edge lengths)", "--fitted-control-spacing",
+                &O::fitted, &FittedCurveOptions::control_spacing),
+      option<O>("fitted.smoothing", within(FittedCurveOptions::smoothing_range), "Fitted curve: weight of the spline's "
+                "bending penalty, per control point's data (0: plain least squares)", "", &O::fitted,
+                &FittedCurveOptions::smoothing),
+      option<O>("fitted.min_dihedral", within(FittedCurveOptions::min_dihedral_range), "Fitted curve: sides closer "
+                "to coplanar than this (degrees) are no crease: the surface fit is used", "", &O::fitted,
+                &FittedCurveOptions::min_dihedral),
+      option<O>("fitted.max_shift", within(FittedCurveOptions::max_shift_range), "Fitted curve: a fitted point "
+                "further than this from the surface line (local edge lengths) is replaced by the line's", "", &O::fitted,
+                &FittedCurveOptions::max_shift),
+      option<O>("fitted.corner_angle", within(FittedCurveOptions::corner_angle_range), "Fitted curve: the spline is "
+                "split where the line turns by more than this within an edge (degrees)", "", &O::fitted,
+                &FittedCurveOptions::corner_angle),
       option<O>("trace.sign", {}, "A line traced from one key follows: a crease's sign near the key, else the larger "
                 "curvature's (auto), or ridges or valleys only", "--trace-sign", &O::trace, &TraceOptions::sign),
       option<O>("trace.max_edges", within(TraceOptions::max_edges_range, kEngineEnd, 1000), "Traced lines: the longest, "

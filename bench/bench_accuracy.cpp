@@ -278,6 +278,25 @@ double median(std::vector<double> v) {
 
 constexpr double kWorseTolerance = 1e-3;
 
+// The fitted space curve (engine/fitted_curve.h) beside the surface line: its distance to the
+// same truth, and where its points came from.
+struct FittedOutcome {
+  bool present = false;
+  LineDistance distance;
+  double crease_share = 0, fallback_share = 0, ms = 0;
+};
+
+FittedOutcome measure_fitted(const FeatureLineResult& r, const std::function<double(const Eigen::Vector3d&)>& distance) {
+  FittedOutcome out;
+  if (!r.fitted || r.fitted->points.empty()) return out;
+  out.present = true;
+  out.distance = arc_length_distance(r.fitted->points, r.fitted->closed, distance);
+  out.crease_share = r.fitted->crease_share;
+  out.fallback_share = r.fitted->fallback_share;
+  out.ms = r.fitted->elapsed_ms;
+  return out;
+}
+
 struct LineOutcome {
   std::uint64_t seed = 0;
   std::vector<std::uint32_t> keys;
@@ -288,6 +307,7 @@ struct LineOutcome {
   int iterations = 0;
   std::size_t fallbacks = 0;
   double floor = -1;  ///< surface_floor (CAD chains), -1 otherwise
+  FittedOutcome fitted;
   bool worse() const { return !failed && refined.mean > initial.mean + kWorseTolerance; }
 };
 
@@ -469,6 +489,7 @@ LineOutcome run_line(const PreparedMesh& mesh, const LineSpec& spec, const Varia
   request.keys = spec.keys;
   request.closed = spec.closed;
   request.options = v.line;
+  request.options.fitted.enabled = true;  // measured beside the surface line; it changes nothing else
   try {
     const auto r = detect_feature_line(mesh, request);
     const auto refined = refined_positions(r);
@@ -479,6 +500,7 @@ LineOutcome run_line(const PreparedMesh& mesh, const LineSpec& spec, const Varia
     out.fallbacks = r.initial.fallbacks.size();
     out.ms = r.timings.total_ms;
     out.floor = surface_floor(mesh, spec);
+    out.fitted = measure_fitted(r, spec.distance);
     if (at.trace) trace_line(at.c.name, at.noise, at.seed, mesh.statistics.noise, r, refined, spec, out.floor);
   } catch (const std::exception& e) {
     out.failed = true;
@@ -600,6 +622,49 @@ void print_summary(const BenchResults& results, const std::vector<Variant>& vari
   }
 }
 
+// The fitted curve beside the surface lines, per row: its mean distance, its ratio to the initial
+// and the refined line's, the lines where it is worse than the refined line, and (noisy CAD) the
+// summed ratio to the initial lines.
+void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& variants, const std::vector<Case>& cases) {
+  std::printf("\n## Fitted curve (fitted.enabled, defaults)\n\n");
+  std::printf("| variant | case | noise %% | lines | init mean | ref mean | fitted mean | fitted max | fitted/init | fitted/ref |"
+              " floor | fitted worse than ref | crease share | fallback share | fitted ms |\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  double noisy_cad_fitted = 0, noisy_cad_initial = 0, noisy_cad_refined = 0;
+  std::size_t noisy_cad_lines = 0, noisy_cad_worse = 0;
+  for (const auto& [key, row] : results.rows) {
+    const Case& c = cases[key.case_index];
+    const double noise = c.noise_levels[key.noise_index];
+    double initial = 0, refined = 0, fitted = 0, fitted_max = 0, crease = 0, fallback = 0, floor = 0;
+    std::size_t n = 0, worse = 0;
+    std::vector<double> ms;
+    for (const auto& l : row.lines) {
+      if (l.failed || !l.fitted.present) continue;
+      ++n;
+      initial += l.initial.mean, refined += l.refined.mean, fitted += l.fitted.distance.mean, floor += l.floor;
+      fitted_max = std::max(fitted_max, l.fitted.distance.max);
+      crease += l.fitted.crease_share, fallback += l.fitted.fallback_share;
+      worse += l.fitted.distance.mean > l.refined.mean + kWorseTolerance;
+      ms.push_back(l.fitted.ms);
+    }
+    if (n == 0) continue;
+    if (c.group == "cad" && noise > 0)
+      noisy_cad_fitted += fitted, noisy_cad_initial += initial, noisy_cad_refined += refined, noisy_cad_lines += n,
+          noisy_cad_worse += worse;
+    const double k = double(n);
+    char floor_text[16] = "-";
+    if (row.lines.front().floor >= 0) std::snprintf(floor_text, sizeof floor_text, "%.3f", floor / k);
+    std::printf("| %s | %s | %.0f | %zu | %.3f | %.3f | %.3f | %.3f | %s | %s | %s | %zu | %.2f | %.2f | %.2f |\n",
+                variants[key.variant_index].name.c_str(), c.name.c_str(), noise, n, initial / k, refined / k, fitted / k,
+                fitted_max, ratio_text(fitted, initial).c_str(), ratio_text(fitted, refined).c_str(), floor_text, worse,
+                crease / k, fallback / k, median(ms));
+  }
+  if (noisy_cad_lines > 0)
+    std::printf("\nNoisy CAD, all lines (%zu): fitted / initial %s, refined / initial %s, fitted worse than refined %zu\n",
+                noisy_cad_lines, ratio_text(noisy_cad_fitted, noisy_cad_initial).c_str(),
+                ratio_text(noisy_cad_refined, noisy_cad_initial).c_str(), noisy_cad_worse);
+}
+
 // The lines refining made worst (largest excess first), then every line that failed.
 void print_worst_lines(const BenchResults& results, const std::vector<Variant>& variants, const std::vector<Case>& cases,
                        int worst_count) {
@@ -652,6 +717,7 @@ int main(int argc, char** argv) {
   print_header(args->seeds, sizes, results.chains_per_mesh);
   print_rows(results, variants, cases);
   print_summary(results, variants, cases);
+  print_fitted_rows(results, variants, cases);
   if (args->worst_count > 0) print_worst_lines(results, variants, cases, args->worst_count);
   std::printf("\n%.1f s\n", seconds);
   return 0;

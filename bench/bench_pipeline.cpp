@@ -6,7 +6,7 @@
 // a change to prepare_mesh shows where its time went.
 //
 // usage: bench_pipeline [--lines N] [--keys feature|random|both] [--prepare-runs R] [--dump-curvature DIR]
-//                       [--no-crest] [MESH ...]
+//                       [--no-crest] [--fitted] [MESH ...]
 //   (default meshes: the four of the README)
 //   --lines N            lines per mesh and key mode (default 40; 0: preparation only)
 //   --keys MODE          feature: 3 keys along a feature (12 and 24 rings from the first);
@@ -17,6 +17,8 @@
 //                        k_max, k_min (%.17g), then the crease flags; two dumps compared tell
 //                        whether a change to the curvature stage changed its results
 //   --no-crest           lines without crest localisation (its cost is in the snake column)
+//   --fitted             lines with the fitted curve too (fitted.enabled); its own time (not in
+//                        total) is printed under each row
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -93,6 +95,7 @@ struct LineRow {
   std::size_t lines = 0, fallbacks = 0;
   double initial = 0, strip = 0, flatten = 0, snake = 0, median_total = 0, p90_total = 0, iterations = 0,
          per_piece = 0;
+  double fitted = -1;  ///< median time of the fitted curve (--fitted), -1 without it
 };
 
 double percentile(std::vector<double> v, double q) {
@@ -102,16 +105,18 @@ double percentile(std::vector<double> v, double q) {
 }
 
 // `lines` lines on `mesh` with keys picked by `mode` (the same seed for every mesh and mode).
-LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, bool crest) {
+LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, bool crest, bool fitted) {
   std::mt19937_64 rng(20041101);
-  std::vector<double> initial, strip, flatten, snake, total, iterations, per_piece;
+  std::vector<double> initial, strip, flatten, snake, total, iterations, per_piece, fitted_ms;
   LineRow row;
   for (int i = 0; i < lines; ++i) {
     FeatureLineRequest request;
     request.keys = mode == KeyMode::feature ? pick_feature_keys(mesh, rng) : pick_random_keys(mesh, rng);
     request.options.crest.enabled = crest;
+    request.options.fitted.enabled = fitted;
     if (request.keys.empty()) break;
     const auto r = detect_feature_line(mesh, request);
+    if (r.fitted) fitted_ms.push_back(r.fitted->elapsed_ms);
     initial.push_back(r.timings.initial_ms);
     strip.push_back(r.timings.strip_ms);
     flatten.push_back(r.timings.flatten_ms);
@@ -125,6 +130,7 @@ LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, bool crest)
   row.initial = median(initial), row.strip = median(strip), row.flatten = median(flatten), row.snake = median(snake);
   row.median_total = median(total), row.p90_total = percentile(total, 0.9);
   row.iterations = median(iterations), row.per_piece = median(per_piece);
+  if (fitted) row.fitted = median(fitted_ms);
   return row;
 }
 
@@ -132,6 +138,7 @@ void print_row(const std::string& name, KeyMode mode, const PreparedMesh& mesh, 
   std::printf("%-20s %-7s %9zu %8.1f %8.1f | %5zu %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f | %6.0f %5.0f %6zu\n",
               name.c_str(), to_string(mode), mesh.statistics.faces, load_ms, mesh.prepare_ms, r.lines, r.initial,
               r.strip, r.flatten, r.snake, r.median_total, r.p90_total, r.iterations, r.per_piece, r.fallbacks);
+  if (r.fitted >= 0) std::printf("%-20s %-7s   fitted curve: median %.3f ms per line (beside total)\n", "", "", r.fitted);
 }
 
 }  // namespace
@@ -139,6 +146,7 @@ void print_row(const std::string& name, KeyMode mode, const PreparedMesh& mesh, 
 int main(int argc, char** argv) {
   int lines = 40, prepare_runs = 3;
   bool crest = true;  // --no-crest: the snake's line, to measure what crest localisation costs
+  bool fitted = false;  // --fitted: the fitted curve too, timed on its own
   std::string dump_dir;
   std::vector<std::string> meshes;
   std::vector<KeyMode> modes{KeyMode::feature, KeyMode::random};
@@ -148,6 +156,7 @@ int main(int argc, char** argv) {
     else if (arg == "--prepare-runs" && i + 1 < argc) prepare_runs = std::max(1, std::atoi(argv[++i]));
     else if (arg == "--dump-curvature" && i + 1 < argc) dump_dir = argv[++i];
     else if (arg == "--no-crest") crest = false;
+    else if (arg == "--fitted") fitted = true;
     else if (arg == "--keys" && i + 1 < argc) {
       const std::string which = argv[++i];
       if (which == "feature") modes = {KeyMode::feature};
@@ -185,7 +194,7 @@ int main(int argc, char** argv) {
       breakdowns.emplace_back(name, breakdown);
       if (!dump_dir.empty()) dump_curvature(*mesh, dump_dir + "/" + name + ".curvature");
       for (const KeyMode mode : modes) {
-        const LineRow row = run_lines(*mesh, mode, lines, crest);
+        const LineRow row = run_lines(*mesh, mode, lines, crest, fitted);
         print_row(name, mode, *mesh, load_ms, row);
         auto& [smallest, largest] = extremes[int(mode)];
         if (mesh->statistics.faces < smallest.faces) smallest = {mesh->statistics.faces, row.median_total};

@@ -254,6 +254,7 @@ void check_min_piece_edges(const FeatureLineOptions& options) {
 
 void check_feature_line_options(const FeatureLineOptions& options) {
   check_min_piece_edges(options);
+  check_fitted_curve_options(options.fitted);
   check_strip_options(options.strip);
   check_snake_options(options.snake);
   check_crest_options(options.crest);
@@ -312,12 +313,24 @@ void trace_initial_line(const PreparedMesh& pm, const FeatureLineRequest& reques
   for (auto i : result.initial.key_indices) result.keys.push_back(result.initial.vertices[i]);
 }
 
+// The space curve beside the surface line, when asked for (engine/fitted_curve.h); `exact`
+// marks the refined points of exact crease runs (empty: none).
+void fit_curve_when_asked(const PreparedMesh& pm, const FeatureLineOptions& options, double feature_sign,
+                          std::vector<char> exact, FeatureLineResult& result) {
+  if (!options.fitted.enabled) return;
+  FittedCurveLine line{result.refined, result.closed, feature_sign, std::move(exact), 0};
+  const std::size_t edges = result.initial.vertices.size() - (result.closed ? 0 : 1);
+  if (edges > 0) line.edge_length = result.initial.length / double(edges);
+  result.fitted = fit_feature_curve(pm, line, options.fitted);
+}
+
 }  // namespace
 
 FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineRequest& request) {
   const auto start = Clock::now();
   const FeatureLineOptions& options = request.options;
   check_min_piece_edges(options);
+  if (options.fitted.enabled) check_fitted_curve_options(options.fitted);
   FeatureLineResult result;
   result.keys = request.keys;
   result.closed = request.closed;
@@ -336,6 +349,7 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
     result.refined = vertex_points(pm, result.initial.vertices);
     result.refined_length = polyline_length(result.refined, closed);
     result.timings.total_ms = ms_since(start);
+    fit_curve_when_asked(pm, options, line_snake_options(pm, request, result).feature_sign, {}, result);
     return result;
   }
 
@@ -344,6 +358,7 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   mark_crease_pieces(pm, options, line.vertices, snake_options.feature_sign, pieces);
   const LineRun run{pm, options, snake_options, request.cancel, line.vertices};
   std::vector<SurfacePoint>& refined = result.refined;
+  std::vector<char> exact;  // per refined point: on an exact crease run (the fitted curve keeps those)
   while (!pieces.empty()) {
     throw_if_cancelled(request.cancel);
     PieceWork work = start_piece(run, pieces.front());
@@ -352,11 +367,15 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
     ++result.pieces;
     result.piece_reports.push_back(std::move(work.report));
     // Pieces meet at pinned vertices: keep the shared point once.
-    refined.insert(refined.end(), work.points.begin() + (refined.empty() ? 0 : 1), work.points.end());
+    const std::size_t first = refined.empty() ? 0 : 1;
+    refined.insert(refined.end(), work.points.begin() + std::ptrdiff_t(first), work.points.end());
+    if (options.fitted.enabled) exact.resize(refined.size(), work.piece.exact);
   }
   if (closed && refined.size() > 1) refined.pop_back();  // back at the first key
+  if (!exact.empty()) exact.resize(refined.size());
   result.refined_length = polyline_length(refined, closed);
   result.timings.total_ms = ms_since(start);
+  fit_curve_when_asked(pm, options, snake_options.feature_sign, std::move(exact), result);
   return result;
 }
 

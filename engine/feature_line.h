@@ -10,6 +10,7 @@
 #include "engine/crease_fit.h"
 #include "engine/crest_localization.h"
 #include "engine/feature_strip.h"
+#include "engine/fitted_curve.h"
 #include "engine/initial_line.h"
 #include "engine/prepared_mesh.h"
 #include "engine/snake.h"
@@ -42,6 +43,9 @@ struct FeatureLineOptions {
   /// Never worse: a refined piece whose mean feature strength along it falls below this share
   /// of its initial line's is replaced by the initial line (and reported in `pieces`).
   double keep_initial_below = 0.9;
+  /// A smooth space curve fitted beside the surface line, allowed to leave the surface
+  /// (engine/fitted_curve.h); off by default.
+  FittedCurveOptions fitted;
 
   /// What detect_feature_line accepts; api/options_table.cpp's limits lie inside.
   static constexpr ValidRange min_piece_edges_range = at_least(2);
@@ -104,6 +108,9 @@ struct FeatureLineResult {
   std::vector<PieceReport> piece_reports;  ///< one per piece, in line order
   StageTimings timings;
   std::vector<std::string> warnings;
+  /// The fitted space curve, when FeatureLineOptions::fitted.enabled (its time is its own, not
+  /// in `timings`).
+  std::optional<FittedCurveResult> fitted;
 };
 
 /// Runs the pipeline on a prepared mesh. Thread-safe: the mesh is only read.

@@ -227,9 +227,9 @@ const OptionSpec& spec_named(const std::vector<OptionSpec>& specs, const std::st
 }
 
 TEST(OptionTable, LimitsAreTheEnginesRanges) {
-  // 25 feature-line rows (rings, min_piece_edges, twelve snake options, four crest options, seven
-  // trace options), 3 segmentation, 4 curvature.
-  EXPECT_EQ(expect_limits_inside_engine_ranges(feature_line_option_table()), 25u);
+  // 31 feature-line rows (rings, min_piece_edges, twelve snake options, four crest options, seven
+  // trace options, six fitted-curve options), 3 segmentation, 4 curvature.
+  EXPECT_EQ(expect_limits_inside_engine_ranges(feature_line_option_table()), 31u);
   EXPECT_EQ(expect_limits_inside_engine_ranges(segmentation_option_table()), 3u);
   EXPECT_EQ(expect_limits_inside_engine_ranges(curvature_option_table()), 4u);
   const auto line = option_specs(feature_line_option_table());
@@ -300,16 +300,17 @@ TEST(OptionTable, EngineAcceptsWhatTheTableAcceptsAndRefusesWhatItsRangeRefuses)
   for (const auto& [what, options] : segmentation) EXPECT_THROW(check_segmentation_options(options), InvalidInputError) << what;
   const auto curvature = options_outside_engine_ranges(curvature_option_table());
   for (const auto& [what, options] : curvature) EXPECT_THROW(check_curvature_options(options), InvalidInputError) << what;
-  // Two ends of rings, one of each other line option but the crest's four and the trace's seven,
-  // which have two (max_edges: below 2, and infinity); both ends of the three segmentation ranges;
-  // radius, passes and tolerance at both ends, crease_angle above its maximum.
-  EXPECT_EQ(line.size(), 37u);
+  // Two ends of rings, one of each other line option but the crest's four, the trace's seven and
+  // the fitted curve's six, which have two (max_edges: below 2, and infinity); both ends of the
+  // three segmentation ranges; radius, passes and tolerance at both ends, crease_angle above its maximum.
+  EXPECT_EQ(line.size(), 49u);
   EXPECT_EQ(segmentation.size(), 6u);
   EXPECT_EQ(curvature.size(), 7u);
 }
 
 // The whole engine, not only its checks: a line on a small ridge field runs with every numeric
-// row at each of its table limits, and the mesh prepares with every curvature row at its limits.
+// row at each of its table limits (the fitted curve on, so its rows are exercised too), and the
+// mesh prepares with every curvature row at its limits.
 TEST(OptionTable, LinesAndPreparationRunAtEveryTableLimit) {
   const auto field = testing::make_ridge_field(21, 0.2, 3, 0.3, 0.2, 0.3);
   const auto mesh = prepare_mesh(field.mesh);
@@ -320,9 +321,12 @@ TEST(OptionTable, LinesAndPreparationRunAtEveryTableLimit) {
     FeatureLineRequest request;
     request.keys = keys;
     request.options = options;
+    request.options.fitted.enabled = true;
     EXPECT_NO_THROW({
       const auto line = detect_feature_line(*mesh, request);
       EXPECT_GE(line.refined.size(), 2u) << what;
+      ASSERT_TRUE(line.fitted) << what;
+      EXPECT_GE(line.fitted->points.size(), 2u) << what;
     }) << what;
   }
   for (const auto& [what, options] : options_at_table_limits(curvature_option_table())) {

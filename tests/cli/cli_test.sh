@@ -45,6 +45,20 @@ check "--initial geodesic is honoured" [ "$(jq -r .initial.method "$tmp/geo.json
 "$FEATURELINE" detect "$mesh" --keys 10,200,400 --out "$tmp/line.glb"; rc=$?
 check "--out .glb writes a GLB" [ $rc = 0 ] && check "GLB magic" [ "$(head -c 4 "$tmp/line.glb")" = glTF ]
 
+check "no fitted curve unless asked" [ "$(jq 'has("fitted")' "$tmp/line.json")" = false ]
+"$FEATURELINE" detect "$mesh" --keys 10,200,400 --fitted >"$tmp/fitted.json"; rc=$?
+check "--fitted exits 0" [ $rc = 0 ]
+check "--fitted answers a fitted curve with its control points per unit length" \
+  [ "$(jq '(.fitted.points|length) > 2 and .fitted.control_points_per_unit_length > 0' "$tmp/fitted.json")" = true ]
+check "--fitted leaves the refined line as it was" [ "$(jq -c .refined "$tmp/fitted.json")" = "$(jq -c .refined "$tmp/line.json")" ]
+"$FEATURELINE" detect "$mesh" --keys 10,200,400 --fitted --fitted-control-spacing 4 --out "$tmp/fitted.obj"; rc=$?
+check "--fitted --out .obj writes the line and its fitted curve" \
+  [ $rc = 0 ] && check "OBJ objects" [ "$(grep -c '^o ' "$tmp/fitted.obj")" = 2 ] && check "OBJ fitted object" grep -q '^o line_0_fitted$' "$tmp/fitted.obj"
+"$FEATURELINE" detect "$mesh" --keys 10,200,400 --fitted --out "$tmp/fitted.polylines.txt"; rc=$?
+check "--fitted --out .polylines.txt writes two polylines" [ $rc = 0 ] && check "two text lines" [ "$(wc -l <"$tmp/fitted.polylines.txt")" = 2 ]
+"$FEATURELINE" detect "$mesh" --keys 10,200,400 --fitted --out "$tmp/fitted.glb"; rc=$?
+check "--fitted --out .glb names the fitted curve's node" [ $rc = 0 ] && check "GLB node fitted_curve_0" grep -q fitted_curve_0 "$tmp/fitted.glb"
+
 "$FEATURELINE" detect "$mesh" --keys 10,99999999 >"$tmp/out" 2>"$tmp/err"; rc=$?
 check "out-of-range key exits 1" [ $rc = 1 ]
 check "out-of-range key: one clear line" [ "$(cat "$tmp/err")" = "featureline: request.keys[1] is vertex 99999999, but the mesh has only 6475 vertices" ]

@@ -19,7 +19,7 @@ export function readOptions() {
         problems.push(`${el.labels?.[0]?.textContent ?? el.name} must be ${integer ? 'an integer' : 'a number'} from ${min} to ${max}`);
         continue;
       }
-    } else if (el.name === 'refine') {
+    } else if (el.name === 'refine' || el.name === 'fitted.enabled') {
       value = value === 'true';
     }
     const path = el.name.split('.');

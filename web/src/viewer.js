@@ -16,6 +16,7 @@ import { SurfaceLayer } from './surface_layer.js';
 export const COLORS = {
   initial: 0xff8c1a,
   refined: 0x00d0ff,
+  fitted: 0xff33cc,
   surface: 0xc9ccd2,
   key: 0xffe14d,
   firstKey: 0x5cff8a,
@@ -806,14 +807,17 @@ export class Viewer {
     for (const line of lines) {
       const active = line.id === activeId;
       const r = line.result;
-      for (const [kind, color, width] of [['initial', COLORS.initial, 2], ['refined', COLORS.refined, 3.5]]) {
+      // The fitted curve (options.fitted.enabled) is always dashed: it may leave the surface.
+      for (const [kind, color, width] of [['initial', COLORS.initial, 2], ['refined', COLORS.refined, 3.5], ['fitted', COLORS.fitted, 2.5]]) {
         const points = r?.[kind]?.points;
         if (!(points?.length >= 2)) continue;
-        const [key, entry] = this.lineEntry(previous, line.id, kind, points, r.closed);
+        const closed = kind === 'fitted' ? r.fitted.closed : r.closed;
+        const [key, entry] = this.lineEntry(previous, line.id, kind, points, closed);
         const look = { active, kind, lineId: line.id, stale: line.stale };
-        if (!entry.objects) entry.objects = this.lineObjects(entry.geometry, color, width, look);
+        const dashed = line.stale || kind === 'fitted';
+        if (!entry.objects) entry.objects = this.lineObjects(entry.geometry, color, width, { ...look, stale: dashed });
         for (const o of entry.objects) {
-          o.material = this.lineMaterial(color, width, { ghost: o.userData.ghost, active, stale: line.stale });
+          o.material = this.lineMaterial(color, width, { ghost: o.userData.ghost, active, stale: dashed });
           Object.assign(o.userData, look);
           this.lineGroup.add(o);
         }
@@ -875,6 +879,7 @@ export class Viewer {
       triangles: this.faceCount,
       initialLines: count((u) => u.kind === 'initial' && !u.ghost),
       refinedLines: count((u) => u.kind === 'refined' && !u.ghost),
+      fittedLines: count((u) => u.kind === 'fitted' && !u.ghost),
       lineObjects: this.lineGroup.children.length,
       keyMarkers: this.keyGroup.children.length,
       keys: this.keyGroup.children.map((m) => ({ lineId: m.userData.lineId, keyIndex: m.userData.keyIndex, vertex: m.userData.vertex, hidden: this.isOccluded(m.position), opacity: m.material.opacity })),
