@@ -118,6 +118,12 @@ struct CrestFit {
   double half_width = std::nan("");  ///< where the fitted profile falls to half its peak (strip units)
 };
 
+// Noise (the mesh's estimate, local edge lengths) from which fits stay in the tangent's frame: the
+// line's bend there follows the snake's wander more than the crest's (bench_accuracy at 30% noise,
+// estimated 0.104-0.109: lines 0.01-0.03 grid spacings further off in the line's frame; at 20%,
+// 0.071-0.074, 0.02-0.03 nearer on curved crests).
+constexpr double kBendFrameMaxNoise = 0.09;
+
 // A crest is where the field falls off across the line by at least this share of its peak
 // within the fit radius; flatter fields (a cylinder's circle, a plane) have no crest to find.
 constexpr double kMinCrestDrop = 0.02;
@@ -258,7 +264,8 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
   normals.front() = end_normal(points, 0, radius), normals.back() = end_normal(points, 1, radius);
   // The bend over three fit radii: the crest's, not the line's ripple at the scale of one fit,
   // which measuring from it would amplify (a ripple bent one way reads as a crest bent the other).
-  const std::vector<double> bends = o.follow_bend ? line_bends(points, normals, 3 * radius) : std::vector<double>(n, 0.0);
+  const bool bent_frame = o.follow_bend && mesh.curvature.noise < kBendFrameMaxNoise;
+  const std::vector<double> bends = bent_frame ? line_bends(points, normals, 3 * radius) : std::vector<double>(n, 0.0);
   const VertexGrid grid(flat, radius);
   const FitInput in{flat, grid, field, on_crease, crease_reach};
   std::array<bool, 2> moves{false, false};  // ends whose fit found a crest within reach
