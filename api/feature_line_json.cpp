@@ -52,6 +52,8 @@ json feature_line_to_json(const FeatureLineResult& r) {
     faces.push_back(p.face);
     barycentric.push_back(json::array({p.barycentric[0], p.barycentric[1], p.barycentric[2]}));
   }
+  json key_points = json::array();
+  for (const auto& p : r.key_points) key_points.push_back(point_json(p));
   json fallbacks = json::array();
   for (const auto& f : r.initial.fallbacks)
     fallbacks.push_back({{"segment", f.segment}, {"from", to_string(f.from)}, {"to", to_string(f.to)}, {"reason", f.reason}});
@@ -81,7 +83,12 @@ json feature_line_to_json(const FeatureLineResult& r) {
         {"points", initial_points},
         {"length", r.initial.length}}},
       {"refined",
-       {{"points", refined_points}, {"faces", faces}, {"barycentric", barycentric}, {"length", r.refined_length}}},
+       {{"points", refined_points},
+        {"faces", faces},
+        {"barycentric", barycentric},
+        {"length", r.refined_length},
+        {"key_points", key_points},
+        {"key_moves", r.key_moves}}},
       {"stats",
        {{"iterations", r.iterations},
         {"strip_faces", r.strip_faces},

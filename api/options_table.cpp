@@ -174,6 +174,8 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "(local edge lengths) stays", "", &O::crease_fit, &CreaseFitOptions::max_shift),
       option<O>("crease_fit.min_crease_share", {0, 1}, "Noisy meshes: a piece with at least this share of crease "
                 "edges is fitted as a crease run", "", &O::crease_fit, &CreaseFitOptions::min_crease_share),
+      option<O>("second_strip", {}, "A piece whose refined line reached its strip's border is refined again on a strip "
+                "around the vertices nearest that line (the stronger line kept)", "--one-strip", &O::second_strip),
       option<O>("crest.enabled", {}, "Place the snake's line on the crest of the feature field across it, located "
                 "inside triangles (false: the snake's line as it settles, the paper's)", "--no-crest", &O::crest, &CrestOptions::enabled),
       option<O>("crest.radius", within(CrestOptions::radius_range), "Crest localisation: smallest fit radius (strip edge "
@@ -204,6 +206,11 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
       option<O>("fitted.corner_angle", within(FittedCurveOptions::corner_angle_range), "Fitted curve: the spline is "
                 "split where the line turns by more than this within an edge (degrees)", "", &O::fitted,
                 &FittedCurveOptions::corner_angle),
+      option<O>("crest.move_keys", {}, "Crest localisation: keys (and other pinned points) move across the line to the "
+                "crest too, within max_shift (false: the line passes through the key vertices)", "--keys-on-vertices",
+                &O::crest, &CrestOptions::move_keys),
+      option<O>("crest.follow_bend", {}, "Crest localisation: fits measure across the line from its bend, so a bent "
+                "crest is not read as an offset into the bend (false: from its tangent)", "", &O::crest, &CrestOptions::follow_bend),
       option<O>("trace.sign", {}, "A line traced from one key follows: a crease's sign near the key, else the larger "
                 "curvature's (auto), or ridges or valleys only", "--trace-sign", &O::trace, &TraceOptions::sign),
       option<O>("trace.max_edges", within(TraceOptions::max_edges_range, kEngineEnd, 1000), "Traced lines: the longest, "

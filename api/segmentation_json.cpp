@@ -63,7 +63,8 @@ FeatureLineResult parse_computed_line(const json& item, const PreparedMesh& mesh
   const std::string at = where + ".refined";
   if (!refined.is_object()) throw InvalidInputError(at + " must be an object with \"faces\" and \"barycentric\"");
   for (auto it = refined.begin(); it != refined.end(); ++it)
-    if (it.key() != "faces" && it.key() != "barycentric" && it.key() != "points" && it.key() != "length")
+    if (it.key() != "faces" && it.key() != "barycentric" && it.key() != "points" && it.key() != "length" &&
+        it.key() != "key_points" && it.key() != "key_moves")
       throw InvalidInputError("unknown field \"" + at + "." + it.key() + "\"");
   const auto faces = refined.find("faces"), barycentric = refined.find("barycentric");
   if (faces == refined.end() || !faces->is_array()) throw InvalidInputError(at + ".faces must be an array of face ids");

@@ -4,8 +4,17 @@
 // Cases:
 //   ridge / valley n=N   make_ridge_field(n, jitter 0.2, seed, +-0.3, width 0.25, bend 0.3); one
 //                        line through the crest's nearest vertices at x = -0.8, 0, 0.8 (picked on
-//                        the clean mesh; the noisy mesh keeps the ids); truth: distance_to_crest
-//                        in xy; unit: the grid spacing 2/(n-1).
+//                        the clean mesh; the noisy mesh keeps the ids); truth: xy distance to the
+//                        field's feature crest (ridge_field_feature_crest: the curvature's peak
+//                        across the curve y = crest(x), up to 0.06 grid spacings beside it in bends
+//                        at n = 351); unit: the grid spacing 2/(n-1).
+//   arc|sine ridge|valley n=N
+//                        make_curved_crest_field: a Gaussian profile (amplitude +-0.3, width 0.25)
+//                        across an arc (radius of curvature 3 widths) or a sine (2.7 widths at its
+//                        bends), measured along the curve's normal, so the truth is the curve
+//                        exactly; keys nearest the crest at both ends of the span and half way;
+//                        unit: the grid spacing; n = 351 with one seed. Also the refined line's
+//                        mean offset into the bends (inward, > 0 inside).
 //   slab skinny|fine, corner / loop
 //                        make_rounded_slab: per corner an open line along the top outline over
 //                        about a quarter of the loop (keys: both ends and the corner's middle),
@@ -32,12 +41,15 @@
 //   --sizes N,..    only these field sizes (n x n grids)
 //   --no-cad        smooth fields only
 //   --cad-only      CAD cases only
+//   --no-curved     no arc and sine crests
+//   --curved-only   arc and sine crests only
 //   --trace         per line on stderr: distances, each piece's outcome, points along the line
 //   --seeds N       seeds for jitter and noise (default 3)
 //   --quick         fields n = 51 and 111 only, one seed, fandisk.off only (a few seconds)
 //   --variant NAME  run one variant of the table below
 //   --worst K       list the K lines where refining made the line worst (default 12)
-// The default run (fields n = 51, 111, 201, 351, i.e. 5k to 245k triangles) takes about 30 s here.
+// The default variant (fields n = 51, 111, 201, 351, i.e. 5k to 245k triangles, and the curved
+// crests at n = 51, 111, 351) takes about 100 s of CPU here, 26 s of it the ridges and valleys.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -58,6 +70,7 @@
 #include "engine/mesh_io.h"
 #include "engine/prepared_mesh.h"
 #include "tests/support/accuracy_meshes.h"
+#include "tests/support/curved_crests.h"
 #include "tests/support/line_metrics.h"
 #include "tests/support/synthetic_meshes.h"
 
@@ -101,6 +114,14 @@ std::vector<Variant> all_variants() {
       variant("jet, fixed radius 6", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.radius = 6; }),
       variant("jet, fixed radius 3", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.radius = 3; }),
       variant("no crest localisation (the snake's line)", [](PrepareOptions&, FeatureLineOptions& o) { o.crest.enabled = false; }),
+      variant("keys on their vertices (crest.move_keys off)", [](PrepareOptions&, FeatureLineOptions& o) { o.crest.move_keys = false; }),
+      variant("tangent-frame crest fits (crest.follow_bend off)", [](PrepareOptions&, FeatureLineOptions& o) { o.crest.follow_bend = false; }),
+      variant("one strip per piece (second_strip off)", [](PrepareOptions&, FeatureLineOptions& o) { o.second_strip = false; }),
+      variant("before bent fits, moving keys and second strips", [](PrepareOptions&, FeatureLineOptions& o) {
+        o.crest.move_keys = false;
+        o.crest.follow_bend = false;
+        o.second_strip = false;
+      }),
   };
 }
 
@@ -119,6 +140,8 @@ struct LineSpec {
   std::vector<std::uint32_t> keys;
   bool closed = false;
   std::function<double(const Eigen::Vector3d&)> distance;  ///< to the truth, in units
+  /// Curved crests: signed offset from the truth towards its bend's centre of curvature, in units.
+  std::function<double(const Eigen::Vector3d&)> inward;
   /// CAD chains: the truth's vertex ids and positions (on the clean mesh), and the unit. The
   /// noisy mesh keeps the ids, so the truth's distance to the noisy surface (the best any line on
   /// that surface can do) is measured near each of them.
@@ -148,6 +171,7 @@ struct Case {
   std::string name;
   std::string group;         ///< "smooth" or "cad"
   bool seeded_mesh = false;  ///< the clean mesh depends on the seed (otherwise one clean run)
+  int max_seeds = 0;         ///< run at most this many seeds (0: --seeds)
   std::vector<double> noise_levels;
   std::function<Scenario(std::uint64_t seed)> build;
 };
@@ -165,7 +189,44 @@ Case ridge_case(bool ridge, int n, const std::vector<double>& noise) {
     s.noise_reference = field->spacing;
     LineSpec line;
     for (double x : {-0.8, 0.0, 0.8}) line.keys.push_back(nearest_vertex(field->mesh, x, field->crest(x)));
-    line.distance = [field](const Eigen::Vector3d& p) { return distance_to_crest(*field, p.x(), p.y()) / field->spacing; };
+    // The field's feature crest, not the curve y = crest(x): its profile is vertical, so in bends
+    // the curvature peaks up to 0.06 grid spacings (n = 351) beside the curve.
+    auto truth = std::make_shared<std::vector<Eigen::Vector3d>>(ridge_field_feature_crest(*field, -1, 1, 0.001));
+    const double unit = field->spacing;
+    line.distance = [truth, unit](const Eigen::Vector3d& p) {
+      return distance_to_polyline(*truth, false, Eigen::Vector3d(p.x(), p.y(), 0)) / unit;
+    };
+    s.lines.push_back(std::move(line));
+    return s;
+  };
+  return c;
+}
+
+// A Gaussian ridge or valley across an arc or a sine (tests/support/curved_crests.h: the profile
+// follows the curve's normal, so the truth is the curve exactly, bends included); one line
+// through the crest's nearest vertices at both ends of the keys' span and half way along it.
+Case curved_case(CrestCurve curve, bool ridge, int n, const std::vector<double>& noise, int max_seeds) {
+  Case c;
+  c.name = std::string(to_string(curve)) + (ridge ? " ridge" : " valley") + " n=" + std::to_string(n);
+  c.group = "curved";
+  c.seeded_mesh = true;
+  c.max_seeds = max_seeds;
+  c.noise_levels = noise;
+  c.build = [curve, ridge, n](std::uint64_t seed) {
+    CurvedCrestOptions options;
+    options.curve = curve;
+    options.n = n;
+    options.seed = seed;
+    options.amplitude = ridge ? 0.3 : -0.3;
+    auto field = std::make_shared<CurvedCrestField>(make_curved_crest_field(options));
+    Scenario s;
+    s.mesh = field->field.mesh;
+    const double unit = field->field.spacing;
+    s.noise_reference = unit;
+    LineSpec line;
+    line.keys = keys_on_curved_crest(*field, {0.0, 0.5, 1.0});
+    line.distance = [field, unit](const Eigen::Vector3d& p) { return field->distance(p.x(), p.y()) / unit; };
+    line.inward = [field, unit](const Eigen::Vector3d& p) { return field->inward_offset(p.x(), p.y()) / unit; };
     s.lines.push_back(std::move(line));
     return s;
   };
@@ -308,6 +369,7 @@ struct LineOutcome {
   std::size_t fallbacks = 0;
   double floor = -1;  ///< surface_floor (CAD chains), -1 otherwise
   FittedOutcome fitted;
+  double inward = std::nan("");  ///< curved crests: the refined line's arc-length mean offset into the bend
   bool worse() const { return !failed && refined.mean > initial.mean + kWorseTolerance; }
 };
 
@@ -406,6 +468,7 @@ namespace {
 struct BenchArgs {
   int seeds = 3, worst_count = 12;
   bool quick = false, no_cad = false, cad_only = false, trace = false;
+  bool no_curved = false, curved_only = false;
   std::vector<int> only_sizes;
   std::string only;  ///< --variant: run this variant only
 };
@@ -420,11 +483,14 @@ std::optional<BenchArgs> parse_args(int argc, char** argv) {
     else if (arg == "--sizes" && i + 1 < argc) a.only_sizes = parse_sizes(argv[++i]);
     else if (arg == "--no-cad") a.no_cad = true;
     else if (arg == "--cad-only") a.cad_only = true;
+    else if (arg == "--no-curved") a.no_curved = true;
+    else if (arg == "--curved-only") a.curved_only = true, a.no_cad = true;
     else if (arg == "--trace") a.trace = true;
     else if (arg == "--variant" && i + 1 < argc) a.only = argv[++i];
     else if (arg == "--worst" && i + 1 < argc) a.worst_count = std::max(0, std::atoi(argv[++i]));
     else {
-      std::fprintf(stderr, "usage: bench_accuracy [--seeds N] [--quick] [--variant NAME] [--worst K] [--sizes 51,351] [--no-cad | --cad-only] [--trace]\n"
+      std::fprintf(stderr, "usage: bench_accuracy [--seeds N] [--quick] [--variant NAME] [--worst K] [--sizes 51,351] [--no-cad | --cad-only]\n"
+                           "                      [--no-curved | --curved-only] [--trace]\n"
                            "  --quick    n=51 and 111 fields, one seed, fandisk only\n");
       return std::nullopt;
     }
@@ -450,11 +516,21 @@ std::vector<int> field_sizes(const BenchArgs& a) {
   return !a.only_sizes.empty() ? a.only_sizes : a.quick ? std::vector<int>{51, 111} : std::vector<int>{51, 111, 201, 351};
 }
 
+// Arc and sine crests of about 5k, 24k and 245k triangles (--sizes: those), ridges and valleys;
+// the 245k fields with one seed, which keeps the default variant's run near a minute.
+void add_curved_cases(const BenchArgs& a, std::vector<Case>& cases) {
+  const std::vector<int> sizes = !a.only_sizes.empty() ? a.only_sizes : a.quick ? std::vector<int>{51, 111} : std::vector<int>{51, 111, 351};
+  for (CrestCurve curve : {CrestCurve::arc, CrestCurve::sine})
+    for (bool ridge : {true, false})
+      for (int n : sizes) cases.push_back(curved_case(curve, ridge, n, {0, 10, 20, 30}, n > 200 ? 1 : 0));
+}
+
 // Ridge and valley fields, slabs, real CAD meshes; false (after saying which) when a mesh is missing.
 bool build_cases(const BenchArgs& a, const std::vector<int>& sizes, std::vector<Case>& cases) {
   for (bool ridge : {true, false})
     for (int n : sizes)
-      if (!a.cad_only) cases.push_back(ridge_case(ridge, n, {0, 10, 20, 30}));
+      if (!a.cad_only && !a.curved_only) cases.push_back(ridge_case(ridge, n, {0, 10, 20, 30}));
+  if (!a.cad_only && !a.no_curved) add_curved_cases(a, cases);
   for (auto t : {SlabTessellation::skinny, SlabTessellation::fine})
     for (bool loop : {false, true})
       if (!a.no_cad) cases.push_back(slab_case(t, loop));
@@ -501,6 +577,7 @@ LineOutcome run_line(const PreparedMesh& mesh, const LineSpec& spec, const Varia
     out.ms = r.timings.total_ms;
     out.floor = surface_floor(mesh, spec);
     out.fitted = measure_fitted(r, spec.distance);
+    if (spec.inward) out.inward = arc_length_distance(refined, r.closed, spec.inward).mean;
     if (at.trace) trace_line(at.c.name, at.noise, at.seed, mesh.statistics.noise, r, refined, spec, out.floor);
   } catch (const std::exception& e) {
     out.failed = true;
@@ -534,7 +611,8 @@ BenchResults run_cases(const std::vector<Case>& cases, const std::vector<Variant
     const Case& c = cases[ci];
     for (std::size_t ni = 0; ni < c.noise_levels.size(); ++ni) {
       const double noise = c.noise_levels[ni];
-      const int runs = (noise == 0 && !c.seeded_mesh) ? 1 : a.seeds;  // a clean fixed mesh needs one run
+      int runs = (noise == 0 && !c.seeded_mesh) ? 1 : a.seeds;  // a clean fixed mesh needs one run
+      if (c.max_seeds > 0) runs = std::min(runs, c.max_seeds);
       for (int seed = 1; seed <= runs; ++seed) {
         const Scenario scenario = c.build(std::uint64_t(seed));
         if (c.group == "cad" && c.name.rfind("slab", 0) != 0) results.chains_per_mesh[c.name] = scenario.lines.size();
@@ -591,6 +669,7 @@ VariantSummary summarize_variant(const BenchResults& results, const std::vector<
     const RowSummary s = summarize(row);
     v.errors += s.failed;
     const std::string label = c.name + " @" + std::to_string(int(noise)) + "%";
+    if (c.group == "curved") continue;  // print_curved_summary
     if (c.group == "smooth") {
       v.smooth_worse += s.worse, v.smooth_lines += s.lines;
       if (noise == 0 && s.refined_mean > v.smooth_clean) v.smooth_clean = s.refined_mean, v.smooth_clean_case = label;
@@ -665,6 +744,74 @@ void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& 
                 ratio_text(noisy_cad_refined, noisy_cad_initial).c_str(), noisy_cad_worse);
 }
 
+// Mean over a row's lines of their mean offset into the bend (curved crests).
+double mean_inward(const Row& row) {
+  double sum = 0;
+  std::size_t count = 0;
+  for (const auto& l : row.lines)
+    if (!l.failed && std::isfinite(l.inward)) sum += l.inward, ++count;
+  return count ? sum / double(count) : std::nan("");
+}
+
+// Curved crests on their own: distances, and the refined line's offset into the bends (> 0: the
+// line cuts inside them, as a snake's elasticity pulls it).
+void print_curved_rows(const BenchResults& results, const std::vector<Variant>& variants, const std::vector<Case>& cases) {
+  bool any = false;
+  for (const auto& [key, row] : results.rows) any = any || cases[key.case_index].group == "curved";
+  if (!any) return;
+  std::printf("\n## Curved crests (arc: radius of curvature 3 widths; sine: 2.7 widths at its bends)\n\n");
+  std::printf("| variant | case | triangles | noise %% | lines | init mean | init max | ref mean | ref max | ref/init | inward | worse |\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const auto& [key, row] : results.rows) {
+    const Case& c = cases[key.case_index];
+    if (c.group != "curved") continue;
+    const RowSummary s = summarize(row);
+    std::printf("| %s | %s | %zu | %.0f | %zu | %.3f | %.3f | %.3f | %.3f | %s | %+.3f | %zu |\n", variants[key.variant_index].name.c_str(),
+                c.name.c_str(), row.triangles, c.noise_levels[key.noise_index], s.lines, s.initial_mean, s.initial_max,
+                s.refined_mean, s.refined_max, ratio_text(s.refined_mean, s.initial_mean).c_str(), mean_inward(row), s.worse);
+  }
+}
+
+// Per variant, the curved crests' worst rows: clean mean and max, noisy means, the largest bias.
+void print_curved_summary(const BenchResults& results, const std::vector<Variant>& variants, const std::vector<Case>& cases) {
+  struct Worst {
+    double value = -1;
+    std::string label;
+    void take(double v, const std::string& l) {
+      if (v > value) value = v, label = l;
+    }
+  };
+  bool any = false;
+  for (const auto& [key, row] : results.rows) any = any || cases[key.case_index].group == "curved";
+  if (!any) return;
+  std::printf("\n## Curved crests, summary per variant\n\n");
+  std::printf("| variant | worst clean ref mean | worst clean ref max | worst 10%% ref mean | worst 20%% ref mean | largest clean |inward| | worse lines |\n");
+  std::printf("|---|---|---|---|---|---|---:|\n");
+  for (std::size_t vi = 0; vi < variants.size(); ++vi) {
+    Worst clean_mean, clean_max, noisy10, noisy20, bias;
+    std::size_t worse = 0, lines = 0;
+    for (const auto& [key, row] : results.rows) {
+      const Case& c = cases[key.case_index];
+      if (key.variant_index != vi || c.group != "curved") continue;
+      const double noise = c.noise_levels[key.noise_index];
+      const RowSummary s = summarize(row);
+      const std::string label = c.name + " @" + std::to_string(int(noise)) + "%";
+      worse += s.worse, lines += s.lines;
+      if (noise == 0) clean_mean.take(s.refined_mean, label), clean_max.take(s.refined_max, label);
+      if (noise == 0) bias.take(std::abs(mean_inward(row)), label);
+      if (noise == 10) noisy10.take(s.refined_mean, label);
+      if (noise == 20) noisy20.take(s.refined_mean, label);
+    }
+    auto cell = [](const Worst& w) {
+      char buffer[96];
+      std::snprintf(buffer, sizeof buffer, "%.3f (%s)", w.value, w.label.c_str());
+      return std::string(buffer);
+    };
+    std::printf("| %s | %s | %s | %s | %s | %s | %zu/%zu |\n", variants[vi].name.c_str(), cell(clean_mean).c_str(),
+                cell(clean_max).c_str(), cell(noisy10).c_str(), cell(noisy20).c_str(), cell(bias).c_str(), worse, lines);
+  }
+}
+
 // The lines refining made worst (largest excess first), then every line that failed.
 void print_worst_lines(const BenchResults& results, const std::vector<Variant>& variants, const std::vector<Case>& cases,
                        int worst_count) {
@@ -718,6 +865,8 @@ int main(int argc, char** argv) {
   print_rows(results, variants, cases);
   print_summary(results, variants, cases);
   print_fitted_rows(results, variants, cases);
+  print_curved_rows(results, variants, cases);
+  print_curved_summary(results, variants, cases);
   if (args->worst_count > 0) print_worst_lines(results, variants, cases, args->worst_count);
   std::printf("\n%.1f s\n", seconds);
   return 0;

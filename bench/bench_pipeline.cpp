@@ -6,7 +6,7 @@
 // a change to prepare_mesh shows where its time went.
 //
 // usage: bench_pipeline [--lines N] [--keys feature|random|both] [--prepare-runs R] [--dump-curvature DIR]
-//                       [--no-crest] [--fitted] [MESH ...]
+//                       [--no-crest] [--fitted] [--options JSON] [MESH ...]
 //   (default meshes: the four of the README)
 //   --lines N            lines per mesh and key mode (default 40; 0: preparation only)
 //   --keys MODE          feature: 3 keys along a feature (12 and 24 rings from the first);
@@ -19,6 +19,7 @@
 //   --no-crest           lines without crest localisation (its cost is in the snake column)
 //   --fitted             lines with the fitted curve too (fitted.enabled); its own time (not in
 //                        total) is printed under each row
+//   --options JSON       line options as the API takes them, e.g. '{"second_strip": false}'
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -28,6 +29,7 @@
 #include <unordered_set>
 #include <vector>
 
+#include "api/feature_line_json.h"
 #include "engine/errors.h"
 #include "engine/feature_line.h"
 #include "engine/mesh_io.h"
@@ -105,15 +107,14 @@ double percentile(std::vector<double> v, double q) {
 }
 
 // `lines` lines on `mesh` with keys picked by `mode` (the same seed for every mesh and mode).
-LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, bool crest, bool fitted) {
+LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, const FeatureLineOptions& options) {
   std::mt19937_64 rng(20041101);
   std::vector<double> initial, strip, flatten, snake, total, iterations, per_piece, fitted_ms;
   LineRow row;
   for (int i = 0; i < lines; ++i) {
     FeatureLineRequest request;
     request.keys = mode == KeyMode::feature ? pick_feature_keys(mesh, rng) : pick_random_keys(mesh, rng);
-    request.options.crest.enabled = crest;
-    request.options.fitted.enabled = fitted;
+    request.options = options;
     if (request.keys.empty()) break;
     const auto r = detect_feature_line(mesh, request);
     if (r.fitted) fitted_ms.push_back(r.fitted->elapsed_ms);
@@ -130,7 +131,7 @@ LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, bool crest,
   row.initial = median(initial), row.strip = median(strip), row.flatten = median(flatten), row.snake = median(snake);
   row.median_total = median(total), row.p90_total = percentile(total, 0.9);
   row.iterations = median(iterations), row.per_piece = median(per_piece);
-  if (fitted) row.fitted = median(fitted_ms);
+  if (options.fitted.enabled) row.fitted = median(fitted_ms);
   return row;
 }
 
@@ -145,8 +146,10 @@ void print_row(const std::string& name, KeyMode mode, const PreparedMesh& mesh, 
 
 int main(int argc, char** argv) {
   int lines = 40, prepare_runs = 3;
-  bool crest = true;  // --no-crest: the snake's line, to measure what crest localisation costs
-  bool fitted = false;  // --fitted: the fitted curve too, timed on its own
+  // --no-crest: the snake's line, to measure what crest localisation costs; --fitted: the fitted
+  // curve too, timed on its own; --options: any other line options (JSON, as the API takes
+  // them), to compare a change with what it replaced.
+  FeatureLineOptions options;
   std::string dump_dir;
   std::vector<std::string> meshes;
   std::vector<KeyMode> modes{KeyMode::feature, KeyMode::random};
@@ -155,8 +158,9 @@ int main(int argc, char** argv) {
     if (arg == "--lines" && i + 1 < argc) lines = std::max(0, std::atoi(argv[++i]));
     else if (arg == "--prepare-runs" && i + 1 < argc) prepare_runs = std::max(1, std::atoi(argv[++i]));
     else if (arg == "--dump-curvature" && i + 1 < argc) dump_dir = argv[++i];
-    else if (arg == "--no-crest") crest = false;
-    else if (arg == "--fitted") fitted = true;
+    else if (arg == "--no-crest") options.crest.enabled = false;
+    else if (arg == "--fitted") options.fitted.enabled = true;
+    else if (arg == "--options" && i + 1 < argc) apply_options_json(nlohmann::json::parse(argv[++i]), options);
     else if (arg == "--keys" && i + 1 < argc) {
       const std::string which = argv[++i];
       if (which == "feature") modes = {KeyMode::feature};
@@ -194,7 +198,7 @@ int main(int argc, char** argv) {
       breakdowns.emplace_back(name, breakdown);
       if (!dump_dir.empty()) dump_curvature(*mesh, dump_dir + "/" + name + ".curvature");
       for (const KeyMode mode : modes) {
-        const LineRow row = run_lines(*mesh, mode, lines, crest, fitted);
+        const LineRow row = run_lines(*mesh, mode, lines, options);
         print_row(name, mode, *mesh, load_ms, row);
         auto& [smallest, largest] = extremes[int(mode)];
         if (mesh->statistics.faces < smallest.faces) smallest = {mesh->statistics.faces, row.median_total};

@@ -17,6 +17,58 @@ Eigen::Vector2d normal_at(const std::vector<StripPoint>& points, std::size_t i) 
   return {-t.y(), t.x()};
 }
 
+// The normal at an end (front: 0, back: 1), from the chord to the first point `reach` along the
+// line: the line's last few points bend towards the pinned vertex, and a normal from them alone
+// would be tilted by that bend.
+Eigen::Vector2d end_normal(const std::vector<StripPoint>& points, int end, double reach) {
+  const std::size_t n = points.size();
+  const std::size_t from = end == 0 ? 0 : n - 1;
+  std::size_t to = from;
+  for (std::size_t k = 1; k < n; ++k) {
+    to = end == 0 ? k : n - 1 - k;
+    if ((points[to].uv - points[from].uv).norm() >= reach) break;
+  }
+  const Eigen::Vector2d t = (end == 0 ? points[to].uv - points[from].uv : points[from].uv - points[to].uv).normalized();
+  return {-t.y(), t.x()};
+}
+
+// The line's signed curvature at each point (> 0: it turns towards its normal `normals[i]`), from
+// a least-squares parabola u = c0 + c1 a + c2 a^2 of the points within `baseline` of it (a along
+// its tangent, u along its normal; curvature 2 c2): many points, so the snake's ripple on a noisy
+// mesh averages out. A crest that bends is a parabola s = k a^2 / 2 in the frame of its tangent; a
+// fit whose quadratic has no a^2 s term reads that bend as an offset of about k <a^2> / 2 (the
+// weighted mean over the fit) towards the bend's centre: 0.05-0.1 grid spacings inside an arc of
+// radius 3 crest widths on 5k-24k triangles (bench_accuracy). The fits therefore measure s from
+// the line's own bend, which follows the crest's. (An a^2 s term in the fit would measure the bend
+// too, but its unknown costs every fit precision: noisy lines came out 10-40% further off.)
+std::vector<double> line_bends(const std::vector<StripPoint>& points, const std::vector<Eigen::Vector2d>& normals,
+                               double baseline) {
+  const std::size_t n = points.size();
+  std::vector<double> bend(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d nu = normals[i], t(nu.y(), -nu.x());
+    Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    auto add = [&](std::size_t j) {
+      const Eigen::Vector2d d = points[j].uv - points[i].uv;
+      if (d.squaredNorm() > baseline * baseline) return false;
+      const double a = d.dot(t) / baseline, u = d.dot(nu) / baseline;  // scaled: well conditioned
+      const Eigen::Vector3d row(1, a, a * a);
+      normal_matrix.noalias() += row * row.transpose();
+      rhs.noalias() += u * row;
+      return true;
+    };
+    add(i);
+    for (std::size_t j = i; j-- > 0 && add(j);) {}
+    for (std::size_t j = i + 1; j < n && add(j); ++j) {}
+    const Eigen::LDLT<Eigen::Matrix3d> solver(normal_matrix);
+    const Eigen::Vector3d c = solver.solve(rhs);
+    if (solver.info() == Eigen::Success && c.allFinite() && normal_matrix(2, 2) > 1e-3 * normal_matrix(0, 0))
+      bend[i] = 2 * c[2] / baseline;
+  }
+  return bend;
+}
+
 // The placed strip vertices bucketed in square cells of the fit radius, so a fit visits the 3 x 3
 // cells around its point instead of the whole strip (a 245k-triangle line's strip has thousands).
 class VertexGrid {
@@ -66,6 +118,12 @@ struct CrestFit {
   double half_width = std::nan("");  ///< where the fitted profile falls to half its peak (strip units)
 };
 
+// Noise (the mesh's estimate, local edge lengths) from which fits stay in the tangent's frame: the
+// line's bend there follows the snake's wander more than the crest's (bench_accuracy at 30% noise,
+// estimated 0.104-0.109: lines 0.01-0.03 grid spacings further off in the line's frame; at 20%,
+// 0.071-0.074, 0.02-0.03 nearer on curved crests).
+constexpr double kBendFrameMaxNoise = 0.09;
+
 // A crest is where the field falls off across the line by at least this share of its peak
 // within the fit radius; flatter fields (a cylinder's circle, a plane) have no crest to find.
 constexpr double kMinCrestDrop = 0.02;
@@ -79,7 +137,8 @@ struct FitInput {
   double crease_reach;  ///< a crease vertex this close to a point leaves it where it is
 };
 
-CrestFit fit_crest(const FitInput& in, const Eigen::Vector2d& p, const Eigen::Vector2d& n, double radius, double min_drop) {
+CrestFit fit_crest(const FitInput& in, const Eigen::Vector2d& p, const Eigen::Vector2d& n, double bend, double radius,
+                   double min_drop) {
   const FlatStrip& flat = in.flat;
   const Eigen::Vector2d t(n.y(), -n.x());
   Eigen::Matrix<double, 6, 6> normal_matrix = Eigen::Matrix<double, 6, 6>::Zero();
@@ -93,7 +152,9 @@ CrestFit fit_crest(const FitInput& in, const Eigen::Vector2d& p, const Eigen::Ve
     const double d2 = d.squaredNorm();
     if (d2 > radius * radius) return;
     crease = crease || (in.on_crease[v] && d2 <= in.crease_reach * in.crease_reach);
-    const double s = d.dot(n) / radius, a = d.dot(t) / radius;  // scaled: a well-conditioned system
+    // Across the line measured from its bend (line_bends), scaled: a well-conditioned system.
+    const double along = d.dot(t);
+    const double s = (d.dot(n) - 0.5 * bend * along * along) / radius, a = along / radius;
     Eigen::Matrix<double, 6, 1> row;
     row << 1, s, s * s, a, a * s, a * a;
     const double w = std::exp(-d2 * inv_two_sigma2);
@@ -128,7 +189,7 @@ double line_fit_radius(const FlatStrip& flat, const std::vector<double>& field, 
   const VertexGrid grid(flat, smallest);
   const FitInput in{flat, grid, field, on_crease, crease_reach};
   for (std::size_t i = 1; i + 1 < points.size(); ++i) {
-    const CrestFit fit = fit_crest(in, points[i].uv, normal_at(points, i), smallest, 0);
+    const CrestFit fit = fit_crest(in, points[i].uv, normal_at(points, i), 0, smallest, 0);
     if (std::isfinite(fit.half_width)) widths.push_back(fit.half_width);
   }
   if (widths.empty()) return smallest;
@@ -137,7 +198,8 @@ double line_fit_radius(const FlatStrip& flat, const std::vector<double>& field, 
 }
 
 // (1, 2, 1)/4 passes over the offsets, each weighted by whether its fit found a crest; the
-// line's ends stay where they are (offset 0, full weight).
+// line's ends keep theirs (their own fit's, where they may move; otherwise 0) at full weight: a
+// mirrored end smoothed with a line still bending towards its old vertex would be pulled back.
 std::vector<double> smooth_offsets(const std::vector<double>& offsets, int passes) {
   const std::size_t n = offsets.size();
   std::vector<double> value(n), weight(n);
@@ -172,7 +234,8 @@ void check_crest_options(const CrestOptions& o) {
 }
 
 CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, const FlatStrip& flat,
-                           const std::vector<StripPoint>& points, double feature_sign, const CrestOptions& o) {
+                           const std::vector<StripPoint>& points, double feature_sign, const CrestOptions& o,
+                           const std::array<CrestEnd, 2>& ends) {
   CrestResult result;
   result.points = points;
   if (!o.enabled || points.size() < 3 || !(strip.mean_edge_length > 0)) return result;
@@ -194,17 +257,44 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
   const double smallest = std::max(o.radius, mesh.curvature.radius) * h;
   if (largest < smallest) return result;
   const double radius = line_fit_radius(flat, field, on_crease, crease_reach, points, smallest, largest);
-  std::vector<double> offsets(points.size(), std::nan(""));
-  offsets.front() = offsets.back() = 0;
+  const std::size_t n = points.size();
+  std::vector<double> offsets(n, std::nan(""));
+  std::vector<Eigen::Vector2d> normals(n);
+  for (std::size_t i = 1; i + 1 < n; ++i) normals[i] = normal_at(points, i);
+  normals.front() = end_normal(points, 0, radius), normals.back() = end_normal(points, 1, radius);
+  // The bend over three fit radii: the crest's, not the line's ripple at the scale of one fit,
+  // which measuring from it would amplify (a ripple bent one way reads as a crest bent the other).
+  const bool bent_frame = o.follow_bend && mesh.curvature.noise < kBendFrameMaxNoise;
+  const std::vector<double> bends = bent_frame ? line_bends(points, normals, 3 * radius) : std::vector<double>(n, 0.0);
   const VertexGrid grid(flat, radius);
   const FitInput in{flat, grid, field, on_crease, crease_reach};
-  for (std::size_t i = 1; i + 1 < points.size(); ++i) {
-    const double s = fit_crest(in, points[i].uv, normal_at(points, i), radius, kMinCrestDrop).offset;
+  std::array<bool, 2> moves{false, false};  // ends whose fit found a crest within reach
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool end = i == 0 || i + 1 == n;
+    const CrestEnd& at = ends[i == 0 ? 0 : 1];
+    if (end && at.placed) {
+      // Where the piece beside it put this end: both pieces meet there.
+      offsets[i] = (at.placed->uv - points[i].uv).dot(normals[i]);
+      result.points[i] = *at.placed;
+      ++result.moved;
+      continue;
+    }
+    if (end && !(at.movable && o.move_keys)) {
+      offsets[i] = 0;
+      continue;
+    }
+    const double s = fit_crest(in, points[i].uv, normals[i], bends[i], radius, kMinCrestDrop).offset;
     if (std::abs(s) <= o.max_shift * h) offsets[i] = s, ++result.moved;
+    else if (end) offsets[i] = 0;  // no crest within reach: the end stays on its vertex
+    else continue;
+    if (end) moves[i == 0 ? 0 : 1] = std::abs(s) <= o.max_shift * h;
   }
   const std::vector<double> smoothed = smooth_offsets(offsets, o.smoothing_passes);
-  for (std::size_t i = 1; i + 1 < points.size(); ++i)
-    if (smoothed[i] != 0) move_along_segment(strip, flat, result.points[i], points[i].uv + smoothed[i] * normal_at(points, i));
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool end = i == 0 || i + 1 == n;
+    if (end && !moves[i == 0 ? 0 : 1]) continue;
+    if (smoothed[i] != 0) move_along_segment(strip, flat, result.points[i], points[i].uv + smoothed[i] * normals[i]);
+  }
   return result;
 }
 

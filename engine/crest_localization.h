@@ -5,10 +5,14 @@
 // the line, found inside triangles: a weighted quadratic fit of the field over the strip's
 // vertices around the point (in the flattened strip's plane), whose maximum along the line's
 // normal is the crest there, as image edge detectors fit a parabola across an edge for sub-pixel
-// positions. The offsets, not the positions, are then smoothed along the line, so noise does not
-// come back and a curved crest is not cut inside its bend.
+// positions. Across a bent crest the fit measures from the line's own bend, so the bend is not
+// read as an offset. The offsets, not the positions, are then smoothed along the line, so noise
+// does not come back and a curved crest is not cut inside its bend. The line's ends (its keys)
+// move to the crest too (move_keys): a key is a vertex picked near the feature, not on it.
 #pragma once
 
+#include <array>
+#include <optional>
 #include <vector>
 
 #include "engine/feature_strip.h"
@@ -26,6 +30,15 @@ struct CrestOptions {
   double max_radius = 8.0;
   double max_shift = 0.5;   ///< largest move of a point across the line, in the strip's mean edge lengths
   int smoothing_passes = 4; ///< (1, 2, 1)/4 passes over the offsets along the line
+  /// The line's pinned ends (its keys, and where a piece was split) move across the line to the
+  /// crest too, within max_shift: a key is a vertex picked near the feature, and the line passes
+  /// through the crest point nearest it. false: they stay on their vertices (the paper's pins).
+  bool move_keys = true;
+  /// Fits measure across the line from its bend (over three fit radii), so a bent crest is not
+  /// read as an offset into the bend, on meshes whose estimated noise is below 0.09 local edge
+  /// lengths (noisier, the line's bend follows its wander more than the crest's). false: from
+  /// its tangent.
+  bool follow_bend = true;
 
   static constexpr ValidRange radius_range = closed_range(1, 12);
   static constexpr ValidRange max_shift_range = closed_range(0, 2);
@@ -35,14 +48,22 @@ struct CrestOptions {
 /// \throw InvalidInputError when an option is outside its range.
 void check_crest_options(const CrestOptions& options);
 
-struct CrestResult {
-  std::vector<StripPoint> points;  ///< the line, ends unchanged
-  std::size_t moved = 0;           ///< interior points whose fit found a crest within max_shift
+/// What one end of the line may do.
+struct CrestEnd {
+  bool movable = false;              ///< may move to the crest (with CrestOptions::move_keys)
+  std::optional<StripPoint> placed;  ///< already placed (the piece on its other side moved it): it goes there
 };
 
-/// Moves the interior points of `points` (a line on the flattened strip, ends pinned) across the
-/// line to the crest of the feature field of sign `feature_sign` (feature_value), as described above.
+struct CrestResult {
+  std::vector<StripPoint> points;  ///< the line; its ends moved only as `ends` allowed
+  std::size_t moved = 0;           ///< points whose fit found a crest within max_shift, or placed ends
+};
+
+/// Moves the points of `points` (a line on the flattened strip) across the line to the crest of
+/// the feature field of sign `feature_sign` (feature_value), as described above; its two ends
+/// (front, back) only as `ends` says.
 CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, const FlatStrip& flat,
-                           const std::vector<StripPoint>& points, double feature_sign, const CrestOptions& options = {});
+                           const std::vector<StripPoint>& points, double feature_sign, const CrestOptions& options = {},
+                           const std::array<CrestEnd, 2>& ends = {});
 
 }  // namespace featureline

@@ -1,12 +1,16 @@
 #include "engine/feature_line.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <deque>
 #include <string>
+#include <unordered_map>
 
 #include "engine/crease_fit.h"
 #include "engine/errors.h"
+#include "engine/internal/edge_search.h"
 
 namespace featureline {
 namespace {
@@ -112,7 +116,48 @@ struct PieceWork {
   std::vector<SurfacePoint> initial_points;
   std::vector<SurfacePoint> points;  ///< the piece's answer
   PieceReport report;
+  /// Its two ends (front, back): where the piece beside already put them, and whether the crest
+  /// localisation may move them (CrestOptions::move_keys).
+  std::array<std::optional<SurfacePoint>, 2> placed_ends;
+  std::array<bool, 2> movable_ends{false, false};
 };
+
+// Where the line passes each of its pinned vertices (keys, split points), indexed by position in
+// the unrolled line, as the first piece to reach it decided: the piece on its other side starts
+// there, so pieces whose crest localisation moved a key still meet.
+class Pins {
+ public:
+  Pins(std::size_t line_size, bool closed) : at_(line_size), closed_(closed) {}
+  std::optional<SurfacePoint>& operator[](std::size_t index) { return at_[slot(index)]; }
+  const std::optional<SurfacePoint>& operator[](std::size_t index) const { return at_[slot(index)]; }
+
+ private:
+  // A closed line's last vertex is its first, repeated.
+  std::size_t slot(std::size_t index) const { return closed_ && index + 1 == at_.size() ? 0 : index; }
+  std::vector<std::optional<SurfacePoint>> at_;
+  bool closed_;
+};
+
+// The piece's ends as the pieces before it left them. A pin shared with a crease piece stays on
+// its vertex: the crease run is kept exactly (or re-fitted) through it.
+void read_pins(const Pins& pins, const std::vector<std::size_t>& crease_pins, PieceWork& work) {
+  const std::size_t at[2] = {work.piece.begin, work.piece.end};
+  for (int e = 0; e < 2; ++e) {
+    work.placed_ends[e] = pins[at[e]];
+    work.movable_ends[e] = std::find(crease_pins.begin(), crease_pins.end(), at[e]) == crease_pins.end();
+  }
+}
+
+// The first piece to reach a pin decides where the line passes it; a later piece meets it there
+// (a piece that kept its initial line or a crease run keeps its inner points and ends on it).
+void write_pins(Pins& pins, PieceWork& work) {
+  const std::size_t at[2] = {work.piece.begin, work.piece.end};
+  for (int e = 0; e < 2; ++e) {
+    SurfacePoint& end = e == 0 ? work.points.front() : work.points.back();
+    if (pins[at[e]]) end = *pins[at[e]];
+    else pins[at[e]] = end;
+  }
+}
 
 PieceWork start_piece(const LineRun& run, const Piece& piece) {
   PieceWork work;
@@ -144,12 +189,37 @@ bool split_where_folded(const LineRun& run, const Piece& piece, const FlatStrip&
   return true;
 }
 
+// A surface point in the strip's plane, or none when its face is not laid out (two look-ups per
+// piece at most: a scan, not an index).
+std::optional<StripPoint> strip_point_of(const FeatureStrip& strip, const FlatStrip& flat, const SurfacePoint& p) {
+  for (std::size_t t = 0; t < strip.faces.size(); ++t) {
+    const auto& corners = strip.triangles[t];
+    if (strip.faces[t] != p.face || !flat.placed[corners[0]] || !flat.placed[corners[1]] || !flat.placed[corners[2]]) continue;
+    StripPoint q;
+    q.triangle = std::uint32_t(t);
+    q.barycentric = Eigen::Vector3d(p.barycentric[0], p.barycentric[1], p.barycentric[2]);
+    q.uv = Eigen::Vector2d::Zero();
+    for (int k = 0; k < 3; ++k) q.uv += p.barycentric[k] * flat.uv[corners[k]];
+    return q;
+  }
+  return std::nullopt;
+}
+
 // Stage 3b on the snake's line, kept only where it is not weaker on the feature than the snake's
 // own (the never-worse guard, applied to this step too).
 void localize_on_crest(const LineRun& run, const FeatureStrip& strip, const FlatStrip& flat, const SnakeResult& snake,
                        PieceWork& work) {
   if (!run.options.crest.enabled) return;
-  const CrestResult crest = localize_crest(run.pm, strip, flat, snake.points, run.snake.feature_sign, run.options.crest);
+  std::array<CrestEnd, 2> ends;
+  for (int e = 0; e < 2; ++e) {
+    ends[e].movable = work.movable_ends[e];
+    if (work.placed_ends[e]) {
+      ends[e].placed = strip_point_of(strip, flat, *work.placed_ends[e]);
+      // Not in this strip's layout: the end stays, and write_pins joins it to the pin.
+      if (!ends[e].placed) ends[e].movable = false;
+    }
+  }
+  const CrestResult crest = localize_crest(run.pm, strip, flat, snake.points, run.snake.feature_sign, run.options.crest, ends);
   if (crest.moved == 0) return;
   std::vector<SurfacePoint> points = map_to_surface(run.pm, strip, crest.points);
   const double strength = mean_feature_strength(run.pm, points, run.snake.feature_sign, run.snake.curvature_cap);
@@ -158,11 +228,26 @@ void localize_on_crest(const LineRun& run, const FeatureStrip& strip, const Flat
   work.report.refined_strength = strength;
 }
 
-// Stages 3-4 on one piece's strip, never worse than the initial line.
-void snake_on_strip(const LineRun& run, const FeatureStrip& strip, const FlatStrip& flat, PieceWork& work,
+// Whether a snake point lies nearer the strip's outermost ring than the ring inside it (over half
+// its barycentric weight on outermost corners): the line went as far from its initial line as the
+// strip lets it, and the feature may lie further out.
+bool reaches_border(const FeatureStrip& strip, const std::vector<StripPoint>& points) {
+  for (const StripPoint& p : points) {
+    double outer = 0;
+    for (int k = 0; k < 3; ++k) outer += strip.ring[strip.triangles[p.triangle][k]] >= strip.rings ? p.barycentric[k] : 0.0;
+    if (outer > 0.5) return true;
+  }
+  return false;
+}
+
+// Stages 3-4 on one piece's strip, never worse than the initial line. True when the snake's line
+// reached the strip's border.
+bool snake_on_strip(const LineRun& run, const FeatureStrip& strip, const FlatStrip& flat, PieceWork& work,
                     FeatureLineResult& result) {
+  bool border = false;
   try {
     const SnakeResult snake = refine_with_snake(run.pm, strip, flat, run.snake, run.cancel);
+    border = reaches_border(strip, snake.points);
     work.points = map_to_surface(run.pm, strip, snake.points);
     result.iterations += snake.iterations;
     work.report.iterations = snake.iterations;
@@ -185,6 +270,61 @@ void snake_on_strip(const LineRun& run, const FeatureStrip& strip, const FlatStr
     result.warnings.push_back("line vertices " + std::to_string(work.sub.front()) + ".." + std::to_string(work.sub.back()) +
                               " were not refined: " + e.what());
   }
+  return border;
+}
+
+// The mesh vertices nearest a refined line, from `first` to `last`: each point's nearest corner,
+// consecutive ones joined by the shortest edge path, loops cut out (a simple open path, as a
+// strip needs).
+std::vector<std::uint32_t> vertex_path_along(const PreparedMesh& pm, const std::vector<SurfacePoint>& points,
+                                             std::uint32_t first, std::uint32_t last) {
+  std::vector<std::uint32_t> path{first};
+  std::unordered_map<std::uint32_t, std::size_t> index{{first, 0}};
+  auto push = [&](std::uint32_t v) {
+    if (const auto it = index.find(v); it != index.end()) {  // back at v: cut the loop out
+      for (std::size_t k = it->second + 1; k < path.size(); ++k) index.erase(path[k]);
+      path.resize(it->second + 1);
+      return;
+    }
+    index.emplace(v, path.size());
+    path.push_back(v);
+  };
+  auto join = [&](std::uint32_t v) {
+    if (v == path.back()) return true;
+    const auto steps = shortest_path_between(pm, path.back(), v, HUGE_VAL);
+    if (steps.empty()) return false;
+    for (std::size_t k = 1; k < steps.size(); ++k) push(steps[k]);
+    return true;
+  };
+  for (std::size_t i = 1; i + 1 < points.size(); ++i) {
+    const SurfacePoint& p = points[i];
+    const auto& corners = pm.triangles[p.face];
+    const int k = int(std::max_element(p.barycentric.begin(), p.barycentric.end()) - p.barycentric.begin());
+    if (!join(corners[k])) return {};
+  }
+  if (!join(last)) return {};
+  return path;
+}
+
+// A second strip around the vertices nearest the snake's line, when that line reached the border
+// of its strip: on fine meshes the initial edge path cuts bends by up to 12 edges, where 8 rings do
+// not reach the crest (a 245k-triangle sine crest: the line lay along the border, 1-4 grid
+// spacings inside the bends). The second line is kept when it is stronger on the feature.
+void refine_again_nearer(const LineRun& run, PieceWork& work, FeatureLineResult& result) {
+  const std::vector<std::uint32_t> path = vertex_path_along(run.pm, work.points, work.sub.front(), work.sub.back());
+  if (path.size() < 3 || path == work.sub) return;
+  PieceWork second = work;
+  second.sub = path;
+  const FeatureStrip strip = extract_feature_strip(run.pm, path, run.options.strip);
+  const FlatStrip flat = flatten_strip(run.pm, strip, run.options.strip);
+  if (flat.flipped_near_line > 0) return;
+  FeatureLineResult tally;  // the second pass's iterations and warnings count only when it is kept
+  snake_on_strip(run, strip, flat, second, tally);
+  if (second.report.kept != "refined" || !(second.report.refined_strength > work.report.refined_strength)) return;
+  work = std::move(second);
+  result.iterations += tally.iterations;
+  result.strip_faces += strip.triangles.size();
+  result.warnings.insert(result.warnings.end(), tally.warnings.begin(), tally.warnings.end());
 }
 
 // Stages 2-4 on one piece: strip, flattening, snake. False when the piece was split instead.
@@ -209,7 +349,8 @@ bool refine_piece_with_snake(const LineRun& run, PieceWork& work, std::deque<Pie
     result.warnings.push_back("the strip around line vertices " + std::to_string(work.sub.front()) + ".." +
                               std::to_string(work.sub.back()) + " folds over when flattened; refined where it is valid");
   t0 = Clock::now();
-  snake_on_strip(run, strip, flat, work, result);
+  if (snake_on_strip(run, strip, flat, work, result) && work.report.kept == "refined" && run.options.second_strip)
+    refine_again_nearer(run, work, result);
   result.timings.snake_ms += ms_since(t0);
   result.strip_faces += strip.triangles.size();
   return true;
@@ -324,6 +465,25 @@ void fit_curve_when_asked(const PreparedMesh& pm, const FeatureLineOptions& opti
   result.fitted = fit_feature_curve(pm, line, options.fitted);
 }
 
+// Where the refined line passes each key (its pin, or the refined point nearest an unpinned
+// interior key) and how far that is from the key's vertex.
+void report_key_points(const PreparedMesh& pm, const UnrolledLine& line, const Pins& pins, FeatureLineResult& result) {
+  const std::size_t keys = line.key_at.size() - (result.closed && !line.key_at.empty() ? 1 : 0);
+  for (std::size_t k = 0; k < keys; ++k) {
+    const Eigen::Vector3d vertex = pm.positions[line.vertices[line.key_at[k]]];
+    Eigen::Vector3d at = vertex;
+    if (const auto& pin = pins[line.key_at[k]]) {
+      at = pin->position;
+    } else {
+      double best = HUGE_VAL;
+      for (const SurfacePoint& p : result.refined)
+        if (const double d = (p.position - vertex).squaredNorm(); d < best) best = d, at = p.position;
+    }
+    result.key_points.push_back(at);
+    result.key_moves.push_back((at - vertex).norm());
+  }
+}
+
 }  // namespace
 
 FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineRequest& request) {
@@ -348,6 +508,7 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   if (!options.refine || line.vertices.size() < 3) {
     result.refined = vertex_points(pm, result.initial.vertices);
     result.refined_length = polyline_length(result.refined, closed);
+    report_key_points(pm, line, Pins(line.vertices.size(), closed), result);
     result.timings.total_ms = ms_since(start);
     fit_curve_when_asked(pm, options, line_snake_options(pm, request, result).feature_sign, {}, result);
     return result;
@@ -356,6 +517,13 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   std::deque<Piece> pieces = pinned_pieces(line, options.pin_interior_keys, closed, result.warnings);
   const SnakeOptions snake_options = line_snake_options(pm, request, result);
   mark_crease_pieces(pm, options, line.vertices, snake_options.feature_sign, pieces);
+  std::vector<std::size_t> crease_pins;
+  for (const Piece& piece : pieces)
+    if (piece.exact || piece.noisy_crease) crease_pins.insert(crease_pins.end(), {piece.begin, piece.end});
+  if (closed)  // the first vertex is also the last
+    for (const std::size_t index : std::vector<std::size_t>(crease_pins))
+      if (index == 0 || index + 1 == line.vertices.size()) crease_pins.insert(crease_pins.end(), {0, line.vertices.size() - 1});
+  Pins pins(line.vertices.size(), closed);
   const LineRun run{pm, options, snake_options, request.cancel, line.vertices};
   std::vector<SurfacePoint>& refined = result.refined;
   std::vector<char> exact;  // per refined point: on an exact crease run (the fitted curve keeps those)
@@ -363,7 +531,9 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
     throw_if_cancelled(request.cancel);
     PieceWork work = start_piece(run, pieces.front());
     pieces.pop_front();
+    read_pins(pins, crease_pins, work);
     if (!refine_piece(run, work, pieces, result)) continue;
+    write_pins(pins, work);
     ++result.pieces;
     result.piece_reports.push_back(std::move(work.report));
     // Pieces meet at pinned vertices: keep the shared point once.
@@ -373,6 +543,7 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   }
   if (closed && refined.size() > 1) refined.pop_back();  // back at the first key
   if (!exact.empty()) exact.resize(refined.size());
+  report_key_points(pm, line, pins, result);
   result.refined_length = polyline_length(refined, closed);
   result.timings.total_ms = ms_since(start);
   fit_curve_when_asked(pm, options, snake_options.feature_sign, std::move(exact), result);

@@ -25,7 +25,13 @@ struct FeatureLineOptions {
   CrestOptions crest;              ///< sub-edge localisation of the snake's line (stage 3b)
   TraceOptions trace;              ///< how a line from one key follows its feature (engine/trace.h)
   bool refine = true;              ///< false: stop after the initial line
-  bool pin_interior_keys = true;   ///< interior keys stay where the user put them
+  /// A piece whose snake line reached its strip's border is refined again on a strip around the
+  /// vertices nearest that line, and the stronger line kept: the initial edge path can cut a
+  /// bend by more than the strip's rings (on fine meshes, up to 12 edges).
+  bool second_strip = true;
+  /// Interior keys pin the line (the crest localisation may still move it across the line to
+  /// the crest: CrestOptions::move_keys)
+  bool pin_interior_keys = true;
   /// A strip whose flattening folds over near the line is split in two (the paper's remedy for
   /// highly curved lines) until pieces are this short (in line edges).
   int min_piece_edges = 6;
@@ -100,6 +106,11 @@ struct FeatureLineResult {
   /// The refined line on the surface. A closed line does not repeat its first point.
   std::vector<SurfacePoint> refined;
   double refined_length = 0;
+  /// Per key, where the refined line passes it: the point the crest localisation moved it to
+  /// (CrestOptions::move_keys) or its vertex; an interior key left unpinned (pin_interior_keys
+  /// false): the refined point nearest it.
+  std::vector<Eigen::Vector3d> key_points;
+  std::vector<double> key_moves;  ///< per key, the distance from its vertex to key_points (mesh units)
   bool refined_by_snake = false;
   int iterations = 0;           ///< snake iterations summed over pieces
   std::size_t strip_faces = 0;  ///< strip triangles summed over pieces

@@ -141,7 +141,7 @@ TEST(CrestLocalization, CleanCrestsBetweenVerticesAreFoundWithinAFewHundredthsOf
   // Straight and bent Gaussian crests (the straight one at y = 0.1234, between grid rows) on
   // jittered grids of 13k and 80k triangles. The snake alone settles where its force balances its
   // rigidity; the crest fit, inside triangles, must come closer, and never be worse. Distances
-  // include the three keys, which stay on their vertices.
+  // include the three keys, which the crest fit moves onto the crest too (crest.move_keys).
   FeatureLineOptions snake_only;
   snake_only.crest.enabled = false;
   for (const int n : {81, 201})

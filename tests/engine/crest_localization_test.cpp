@@ -1,0 +1,121 @@
+// Stage 3b, the crest localisation, against known answers: no bias into the bends of a curved
+// crest, keys moved from their vertices onto a crest that lies between vertices, and clean CAD
+// creases kept exactly with keys free to move. Distances are in the mesh's mean edge lengths (e).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "engine/feature_line.h"
+#include "tests/support/accuracy_meshes.h"
+#include "tests/support/curved_crests.h"
+#include "tests/support/line_metrics.h"
+#include "tests/support/synthetic_meshes.h"
+
+namespace featureline {
+namespace {
+
+using namespace featureline::testing;
+
+TEST(CrestLocalization, ArcCrestIsNotCutInsideItsBend) {
+  // A Gaussian ridge (and valley) across an arc whose radius of curvature is 3 crest widths, on
+  // 24k and 80k triangles: the snake's elasticity and a fit that reads the bend as an offset both
+  // pull a line inside the bend. The line's mean offset into the bend must stay within 0.03 e,
+  // keys included. (On 5k triangles the field itself peaks about 0.05 e inside: its fits and
+  // smoothing blur the crest over about 1.5 edges, which moves a ring's peak inwards by
+  // sigma^2 / 2R.)
+  for (const int n : {111, 201})
+    for (const double amplitude : {0.3, -0.3}) {
+      SCOPED_TRACE("n " + std::to_string(n) + (amplitude > 0 ? " ridge" : " valley"));
+      CurvedCrestOptions options;
+      options.n = n;
+      options.seed = 2;
+      options.amplitude = amplitude;
+      const CurvedCrestField field = make_curved_crest_field(options);
+      const auto mesh = prepare_mesh(field.field.mesh);
+      const double e = mean_edge_length(field.field.mesh);
+      FeatureLineRequest request;
+      request.keys = keys_on_curved_crest(field, {0.0, 0.5, 1.0});
+      const auto result = detect_feature_line(*mesh, request);
+      const auto points = refined_positions(result);
+      const auto inward = arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.inward_offset(p.x(), p.y()) / e; });
+      const auto distance = arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.distance(p.x(), p.y()) / e; });
+      EXPECT_LT(std::abs(inward.mean), 0.03);
+      EXPECT_LT(distance.mean, 0.05);
+    }
+}
+
+// A vertex beside the straight crest y = 0.1234 at x, between `low` and `high` e off it.
+std::uint32_t vertex_beside_crest(const HeightField& field, double x, double low, double high, double e) {
+  std::uint32_t best = 0;
+  double best_distance = HUGE_VAL;
+  for (std::uint32_t v = 0; v < field.mesh.positions.size(); ++v) {
+    const auto& p = field.mesh.positions[v];
+    const double off = std::abs(p[1] - kRidgeCrestOffset) / e;
+    if (off < low || off > high) continue;
+    if (const double d = std::abs(p[0] - x); d < best_distance) best_distance = d, best = v;
+  }
+  return best;
+}
+
+TEST(CrestLocalization, KeysSlideOntoACrestBetweenVertices) {
+  // Straight ridge and valley at y = 0.1234, between grid rows; keys picked 0.2-0.4 e beside it.
+  // With move_keys the line passes within 0.05 e of the crest at each key (and meets itself
+  // there: the key's point is a point of the line); without, through the key vertices.
+  for (const double amplitude : {0.3, -0.3}) {
+    SCOPED_TRACE(amplitude > 0 ? "ridge" : "valley");
+    const HeightField field = make_ridge_field(111, 0.2, 4, amplitude, 0.25, 0.0);
+    const auto mesh = prepare_mesh(field.mesh);
+    const double e = mean_edge_length(field.mesh);
+    FeatureLineRequest request;
+    for (const double x : {-0.7, 0.0, 0.7}) request.keys.push_back(vertex_beside_crest(field, x, 0.2, 0.4, e));
+    const auto moved = detect_feature_line(*mesh, request);
+    ASSERT_EQ(moved.key_points.size(), 3u);
+    ASSERT_EQ(moved.key_moves.size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) {
+      SCOPED_TRACE("key " + std::to_string(k));
+      const auto& p = moved.key_points[k];
+      EXPECT_LT(distance_to_crest(field, p.x(), p.y()) / e, 0.05);
+      EXPECT_GT(moved.key_moves[k] / e, 0.15);
+      double nearest = HUGE_VAL;
+      for (const auto& q : moved.refined) nearest = std::min(nearest, (q.position - p).norm());
+      EXPECT_LT(nearest, 1e-12);
+    }
+    request.options.crest.move_keys = false;
+    const auto pinned = detect_feature_line(*mesh, request);
+    for (std::size_t k = 0; k < 3; ++k) {
+      EXPECT_EQ(pinned.key_moves[k], 0.0);
+      EXPECT_LT((pinned.key_points[k] - mesh->positions[request.keys[k]]).norm(), 1e-12);
+    }
+    // Moving the keys brings the whole line closer, not only its keys.
+    const auto on = crest_distance(field, refined_positions(moved)), off = crest_distance(field, refined_positions(pinned));
+    EXPECT_LT(on.max, off.max);
+    EXPECT_LE(on.mean, off.mean + 1e-3 * e);
+  }
+}
+
+TEST(CrestLocalization, CleanCreasesStayExactWithKeysFreeToMove) {
+  // A CAD crease is kept exactly, keys included: a crease vertex is a kink, not a peak to move to.
+  for (auto tessellation : {SlabTessellation::skinny, SlabTessellation::fine}) {
+    RoundedSlabOptions options;
+    options.tessellation = tessellation;
+    const auto part = make_rounded_slab(options);
+    const auto mesh = prepare_mesh(part.mesh);
+    const auto& loop = part.top_outline;
+    const auto truth = positions_of(part.mesh, loop);
+    const std::size_t q = loop.size() / 4;
+    FeatureLineRequest open, closed;
+    open.keys = {loop[q / 2], loop[q], loop[q + q / 2 + 2]};
+    closed.closed = true;
+    for (std::size_t k = 0; k < 4; ++k) closed.keys.push_back(loop[k * loop.size() / 4 + 1]);
+    for (FeatureLineRequest* request : {&open, &closed}) {
+      request->options.crest.move_keys = true;
+      const auto line = detect_feature_line(*mesh, *request);
+      for (const auto& p : line.refined) EXPECT_LT(distance_to_polyline(truth, true, p.position), 1e-9);
+      for (const double move : line.key_moves) EXPECT_EQ(move, 0.0);
+      for (const auto& piece : line.piece_reports) EXPECT_EQ(piece.kept, "crease");
+    }
+  }
+}
+
+}  // namespace
+}  // namespace featureline
