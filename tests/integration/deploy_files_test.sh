@@ -75,6 +75,8 @@ check "the front's upstreams name the replicas' Services" test -n "$front_names"
 front_nginx_t() {
   local ns=(in_private_mounts) as=(setpriv --reuid=101 --regid=101 --clear-groups) user=""
   [ "$(id -u)" = 0 ] || { ns=(unshare --user --map-root-user --mount --propagation private); as=(env); user="user root;"; }
+  # Where user 101 reaches nothing (a fresh machine whose / is a 0700 folder): nginx as root.
+  "${as[@]}" test -x /usr/sbin/nginx 2>/dev/null || { as=(env); user="user root;"; }
   "${ns[@]}" bash -c 'set -e; exec 3<"$1"; mount --bind "$2" /etc/hosts; mount -t tmpfs -o size=16m,mode=1777 tmpfs /tmp
     mkdir -p /tmp/nginx/logs /tmp/nginx/nginx-temp /tmp/etc; cat <&3 >/tmp/etc/nginx.conf
     [ -n "$3" ] || chown -R 101:101 /tmp/nginx
