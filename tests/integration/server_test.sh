@@ -248,6 +248,14 @@ check_eq "?format=glb: 200" "$STATUS" 200
 check_eq "?format=glb: Content-Type" "$(header "$T/g1.glb" Content-Type)" model/gltf-binary
 check "?format=glb: GLB magic" is_glb "$T/g1.glb"
 validate_gltf "?format=glb: passes the glTF validator" "$T/g1.glb"
+# With the fitted curve: its JSON passes the contract, and its GLB node passes the validator.
+echo '{"keys": [10, 200, 400], "options": {"fitted": {"enabled": true}}}' >"$T/rf.json"
+lines "$T/lf.json" "$T/rf.json"
+expect "a line with its fitted curve" 200 - POST "$FL" "$T/lf.json"
+check "... has fitted points" test "$(jq '.lines[0].fitted.points // .fitted.points | length' "$T/lf.json" 2>/dev/null)" -ge 2
+QUERY='?format=glb' lines "$T/gf.glb" "$T/rf.json"
+check "... as GLB: a node fitted_curve_0" grep -qa 'fitted_curve_0' "$T/gf.glb"
+validate_gltf "... as GLB: passes the glTF validator" "$T/gf.glb"
 lines "$T/g2.glb" "$T/r3.json" -H 'Accept: model/gltf-binary'
 check_eq "Accept model/gltf-binary (batch): 200" "$STATUS" 200
 check_eq "Accept model/gltf-binary: Content-Type" "$(header "$T/g2.glb" Content-Type)" model/gltf-binary
