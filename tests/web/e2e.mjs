@@ -181,6 +181,22 @@ async function run() {
   check(s.lastResult.initial.method === 'marching' || s.lastResult.stats.fallbacks.length > 0,
     `the initial method follows the options panel (${s.lastResult.initial.method})`);
   await page.selectOption('#opt-initial', '');
+  // The fitted curve: asked for by the options panel, answered, drawn beside the line.
+  n0 = s.requestCount;
+  await page.selectOption('#opt-fitted', 'true');
+  await until('the fitted curve to be asked for', async () => (await state()).requestCount > n0);
+  await idle();
+  s = await state();
+  stats = await page.evaluate(() => window.featureline.sceneStats());
+  check(Array.isArray(s.lastResult.fitted?.points) && s.lastResult.fitted.points.length >= 2 && stats.fittedLines === 1,
+    'the fitted-curve option gets a fitted curve, drawn', `${s.lastResult.fitted?.points?.length} points, ${JSON.stringify(stats)}`);
+  // Back to the options of an earlier answer: that answer is taken from the page's cache (no
+  // request), after the options' debounce.
+  await page.selectOption('#opt-fitted', '');
+  for (let i = 0; i < 50 && (await page.evaluate(() => window.featureline.sceneStats())).fittedLines !== 0; i++) await sleep(100);
+  await idle();
+  stats = await page.evaluate(() => window.featureline.sceneStats());
+  check(stats.fittedLines === 0, 'without it no fitted curve is drawn', JSON.stringify(stats));
   await page.fill('#opt-s-iterations', '');
   await sleep(400);
   await idle();
