@@ -65,11 +65,21 @@ export function strongestFeatureVertex(clicked, candidates, field, accept = () =
 // angle it chose from the mesh exceeds every dihedral angle (a coarse box, whose creases are
 // most of its edges: see sharpEdges' caller in mesh_effects.js).
 export function dihedralCreases(positions, index, angleDeg = 30) {
+  const cosLimit = Math.cos((angleDeg * Math.PI) / 180);
+  const pairs = [];
+  visitInteriorEdges(positions, index, (a, b, cos) => {
+    if (cos < cosLimit) pairs.push(Math.min(a, b), Math.max(a, b));
+  });
+  return Uint32Array.from(pairs);
+}
+
+// Calls visit(a, b, cos) once for every edge two faces share, with the cosine of the angle
+// between their normals. Returns the edges only one face has (the boundary), as a map from
+// the edge's key (lower id * 2^32 + higher id) to that face.
+function visitInteriorEdges(positions, index, visit) {
   const faceCount = index.length / 3;
   const normals = faceNormals(positions, index);
-  const cosLimit = Math.cos((angleDeg * Math.PI) / 180);
-  const firstFace = new Map();
-  const pairs = [];
+  const firstFace = new Map(); // edge key -> face, until its second face is seen
   for (let f = 0; f < faceCount; ++f)
     for (let k = 0; k < 3; ++k) {
       const a = index[3 * f + k];
@@ -81,10 +91,9 @@ export function dihedralCreases(positions, index, angleDeg = 30) {
         continue;
       }
       firstFace.delete(key);
-      const cos = normals[3 * f] * normals[3 * g] + normals[3 * f + 1] * normals[3 * g + 1] + normals[3 * f + 2] * normals[3 * g + 2];
-      if (cos < cosLimit) pairs.push(Math.min(a, b), Math.max(a, b));
+      visit(a, b, normals[3 * f] * normals[3 * g] + normals[3 * f + 1] * normals[3 * g + 1] + normals[3 * f + 2] * normals[3 * g + 2]);
     }
-  return Uint32Array.from(pairs);
+  return firstFace;
 }
 
 function faceNormals(positions, index) {
@@ -117,29 +126,14 @@ function faceNormals(positions, index) {
 // number of creases, the share of interior edges whose faces are coplanar (within 1 degree),
 // and which vertices lie on the boundary.
 export function sharpEdges(positions, index, creaseEdges = new Uint32Array(0)) {
-  const faceCount = index.length / 3;
-  const normals = faceNormals(positions, index);
-  const firstFace = new Map(); // edge key -> face, until its second face is seen
   const edges = [...creaseEdges];
   let interior = 0;
   let flat = 0;
   const cosFlat = Math.cos(Math.PI / 180);
-  for (let f = 0; f < faceCount; ++f) {
-    for (let k = 0; k < 3; ++k) {
-      const a = index[3 * f + k];
-      const b = index[3 * f + ((k + 1) % 3)];
-      const key = a < b ? a * 4294967296 + b : b * 4294967296 + a;
-      const g = firstFace.get(key);
-      if (g === undefined) {
-        firstFace.set(key, f);
-        continue;
-      }
-      firstFace.delete(key);
-      const cos = normals[3 * f] * normals[3 * g] + normals[3 * f + 1] * normals[3 * g + 1] + normals[3 * f + 2] * normals[3 * g + 2];
-      interior++;
-      if (cos > cosFlat) flat++;
-    }
-  }
+  const firstFace = visitInteriorEdges(positions, index, (a, b, cos) => {
+    interior++;
+    if (cos > cosFlat) flat++;
+  });
   const onBoundary = new Uint8Array(positions.length / 3);
   for (const key of firstFace.keys()) {
     const a = Math.floor(key / 4294967296);
