@@ -51,30 +51,37 @@ struct ReadMeshOptions {
   std::size_t max_triangles = 40'000'000;
   /// Refuse files larger than this when reading from a path (LimitExceededError).
   std::size_t max_file_bytes = std::size_t(2) << 30;
-  /// What the prepared mesh may cost (PreparedMesh::memory_bytes); 0: no bound. Formats that
-  /// declare their counts before their data (Draco) are refused from those counts when
-  /// prepared_bytes_lower_bound exceeds it, before anything is decoded; prepare_mesh is given
-  /// the same bound.
+  /// What preparing the mesh may hold (see kPreparingBytesPerTriangle); 0: no bound. Formats
+  /// that declare their counts before their data (Draco) are refused from those counts when
+  /// preparation_bytes_lower_bound exceeds it, before anything is decoded; prepare_mesh is
+  /// given the same bound.
   std::size_t memory_budget_bytes = 0;
 };
 
-/// A lower bound of PreparedMesh::memory_bytes for a mesh of `vertices` and `triangles`: per
-/// triangle at least 3 halfedges, 1.5 edges, the face, its corner, neighbour and adjacency
-/// entries (138 B by prepared_mesh.cpp's count); per vertex its point, position, normal,
-/// curvature and row offsets (118 B). Both rounded down, so a mesh above the bound can never
-/// fit a budget and is refused before it is decoded or prepared.
-constexpr std::size_t kPreparedBytesPerTriangle = 136;
-constexpr std::size_t kPreparedBytesPerVertex = 112;
-constexpr std::size_t prepared_bytes_lower_bound(std::size_t vertices, std::size_t triangles) {
+/// What a prepared mesh keeps (PreparedMesh::memory_bytes), at least: per triangle its corners,
+/// input index, the faces across its edges, its entries in the faces around its vertices, and
+/// at least three adjacency entries with their edge lengths (76 B by prepared_mesh.cpp's count);
+/// per vertex its position, normal, curvature, row offsets, component and reported face (88 B).
+/// Both rounded down.
+constexpr std::size_t kPreparedBytesPerTriangle = 72;
+constexpr std::size_t kPreparedBytesPerVertex = 84;
+/// What preparing it holds at its peak, at least: the tables above plus the OpenMesh kernel they
+/// are built from (per triangle 3 halfedges, 1.5 edges and the face, 62 B; per vertex its point,
+/// halfedge and status, 32 B), released once the tables are built. Budgets are checked against
+/// this, so a mesh above the bound can never be prepared within one and is refused before it is
+/// decoded or prepared.
+constexpr std::size_t kPreparingBytesPerTriangle = 136;
+constexpr std::size_t kPreparingBytesPerVertex = 112;
+constexpr std::size_t preparation_bytes_lower_bound(std::size_t vertices, std::size_t triangles) {
   constexpr std::size_t cap = std::size_t(1) << 56;  // declared counts may be absurd: no wrap-around
-  return std::min(vertices, cap) * kPreparedBytesPerVertex + std::min(triangles, cap) * kPreparedBytesPerTriangle;
+  return std::min(vertices, cap) * kPreparingBytesPerVertex + std::min(triangles, cap) * kPreparingBytesPerTriangle;
 }
 
 /// Limits that tie how far a mesh may expand to what the caller accepts. No uncompressed
 /// encoding stores a vertex position or a triangle in fewer than 12 bytes (three floats, three
 /// 32-bit indices), so an honest input of `max_input_bytes` holds at most max_input_bytes / 12 of
-/// each (only Draco compresses further); and a prepared mesh costs at least
-/// kPreparedBytesPerTriangle per triangle and kPreparedBytesPerVertex per vertex against
+/// each (only Draco compresses further); and preparing a mesh holds at least
+/// kPreparingBytesPerTriangle per triangle and kPreparingBytesPerVertex per vertex against
 /// `memory_budget_bytes` (which the options also carry), so more of either could never be kept.
 /// Inputs that expand further (glTF nodes instancing one mesh many times, primitives sharing one
 /// accessor, Draco's declared counts) are then refused with LimitExceededError before their

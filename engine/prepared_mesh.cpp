@@ -1,5 +1,7 @@
 #include "engine/prepared_mesh.h"
 
+#include "engine/tri_mesh.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -100,7 +102,7 @@ bool repeats_a_face(const TriMesh& mesh, const std::vector<TriMesh::VertexHandle
 // Refuses the mesh as soon as what is built so far shows it cannot fit the memory bound.
 void check_prepared_bound(const TriMesh& mesh, std::size_t max_bytes) {
   if (max_bytes == 0) return;
-  const std::size_t needed = prepared_bytes_lower_bound(mesh.n_vertices(), mesh.n_faces());
+  const std::size_t needed = preparation_bytes_lower_bound(mesh.n_vertices(), mesh.n_faces());
   if (needed > max_bytes)
     throw LimitExceededError("the prepared mesh needs more than " + std::to_string(needed >> 20) + " MiB (" +
                              std::to_string(mesh.n_vertices()) + " vertices and " + std::to_string(mesh.n_faces()) +
@@ -130,17 +132,17 @@ void warn_dropped_faces(PreparedMesh& pm, std::size_t first_dropped, std::size_t
   }
 }
 
-// Adds the soup's triangles to pm.mesh and pm.triangles in input order. OpenMesh refuses faces
+// Adds the soup's triangles to `mesh` and pm.triangles in input order. OpenMesh refuses faces
 // that would make an edge or vertex non-manifold (its error stream is switched off in
 // prepare_mesh); like OpenMesh's own reader, we give such a face its own copies of the vertices
 // so it is kept and every id stays valid. Degenerate triangles (a repeated index) and repeats of
 // a triangle already added are dropped (a repeat would take three vertex copies each: one
 // triangle repeated 8 million times had made 24 million vertices); all are reported in
 // pm.warnings. The memory bound is checked before the first face and every 4096 faces.
-void add_triangles(const RawMesh& raw, PreparedMesh& pm, std::size_t max_bytes, const Cancellation* cancel) {
-  TriMesh& mesh = pm.mesh;
+void add_triangles(const RawMesh& raw, TriMesh& mesh, PreparedMesh& pm, std::size_t max_bytes,
+                   const Cancellation* cancel) {
   MeshStatistics& stats = pm.statistics;
-  if (max_bytes != 0 && prepared_bytes_lower_bound(raw.positions.size(), 0) > max_bytes)
+  if (max_bytes != 0 && preparation_bytes_lower_bound(raw.positions.size(), 0) > max_bytes)
     throw LimitExceededError("the mesh's " + std::to_string(raw.positions.size()) + " vertices alone need more than the " +
                              std::to_string(max_bytes >> 20) + " MiB a prepared mesh may use");
   mesh.reserve(raw.positions.size(), raw.triangles.size() * 3 / 2, raw.triangles.size());
@@ -190,8 +192,7 @@ void add_triangles(const RawMesh& raw, PreparedMesh& pm, std::size_t max_bytes, 
 
 // Vertex adjacency in compressed rows with edge lengths beside it; the mean edge length and
 // the boundary edge count.
-void build_vertex_adjacency(PreparedMesh& pm) {
-  const TriMesh& mesh = pm.mesh;
+void build_vertex_adjacency(const TriMesh& mesh, PreparedMesh& pm) {
   const std::size_t n = mesh.n_vertices();
   pm.neighbor_offsets.assign(n + 1, 0);
   for (auto v : mesh.vertices()) pm.neighbor_offsets[v.idx() + 1] = pm.neighbor_offsets[v.idx()] + mesh.valence(v);
@@ -212,6 +213,16 @@ void build_vertex_adjacency(PreparedMesh& pm) {
   }
   pm.statistics.mean_edge_length = mesh.n_edges() > 0 ? edge_sum / double(mesh.n_edges()) : 0;
   if (!(pm.statistics.mean_edge_length > 0)) throw GeometryError("every edge of the mesh has zero length");
+}
+
+// The first face of OpenMesh's circulation around each vertex (not the lowest face id): the
+// face answers have always reported for points on vertices.
+void record_vertex_faces(const TriMesh& mesh, PreparedMesh& pm) {
+  pm.vertex_face.assign(mesh.n_vertices(), UINT32_MAX);
+  for (auto v : mesh.vertices()) {
+    const auto faces = mesh.vf_range(v);
+    if (faces.begin() != faces.end()) pm.vertex_face[std::size_t(v.idx())] = std::uint32_t((*faces.begin()).idx());
+  }
 }
 
 // Components by breadth-first search over the adjacency; unreferenced vertices get -1.
@@ -239,8 +250,7 @@ void label_components(PreparedMesh& pm) {
 
 // Boundary loops (following next_halfedge around each unvisited boundary halfedge) and the
 // bounding box of the referenced vertices.
-void measure_boundary_and_box(PreparedMesh& pm) {
-  const TriMesh& mesh = pm.mesh;
+void measure_boundary_and_box(const TriMesh& mesh, PreparedMesh& pm) {
   MeshStatistics& stats = pm.statistics;
   std::vector<char> seen(mesh.n_halfedges(), 0);
   for (auto h : mesh.halfedges()) {
@@ -382,11 +392,8 @@ std::vector<std::array<std::uint32_t, 3>> build_face_neighbors(const std::vector
 }
 
 std::size_t PreparedMesh::memory_bytes() const {
-  // OpenMesh's array kernel: points, normals-free vertices (halfedge handle), halfedges, edges, faces.
   std::size_t bytes = sizeof(PreparedMesh);
-  bytes += mesh.n_vertices() * (sizeof(TriMesh::Point) + sizeof(int) + 4);
-  bytes += mesh.n_halfedges() * (3 * sizeof(int) + 4);
-  bytes += mesh.n_edges() * 4 + mesh.n_faces() * (sizeof(int) + 4);
+  bytes += vertex_face.capacity() * sizeof(std::uint32_t);
   bytes += source_triangle.capacity() * sizeof(std::uint32_t) + triangles.capacity() * 3 * sizeof(std::uint32_t);
   bytes += positions.capacity() * sizeof(Eigen::Vector3d) + vertex_normals.capacity() * sizeof(Eigen::Vector3d);
   bytes += (curvature.mean.capacity() + curvature.k_max.capacity() + curvature.k_min.capacity()) * sizeof(double);
@@ -414,18 +421,21 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   stats.file_vertices = raw.positions.size();
   stats.file_faces = raw.source_faces;
   Executor& executor = executor_or_default(options.executor);
+  // OpenMesh's halfedge kernel builds the topology (and refuses non-manifold faces); the tables
+  // every request reads are taken from it, and it is released before the curvature stage.
+  auto mesh_ptr = std::make_unique<TriMesh>();
   {
     // The non-manifold counts read only the soup, so they are made beside OpenMesh's insertion
     // (serial, the largest part of this stage).
     MeshStatistics counted;
     executor.run_beside([&raw, &counted] { count_non_manifold(raw, counted); },
-                        [&] { add_triangles(raw, pm, options.max_memory_bytes, cancel); });
+                        [&] { add_triangles(raw, *mesh_ptr, pm, options.max_memory_bytes, cancel); });
     stats.non_manifold_edges = counted.non_manifold_edges;
     stats.non_manifold_vertices = counted.non_manifold_vertices;
   }
-  if (pm.mesh.n_faces() == 0) throw GeometryError("the mesh has no usable triangle");
+  if (mesh_ptr->n_faces() == 0) throw GeometryError("the mesh has no usable triangle");
 
-  TriMesh& mesh = pm.mesh;
+  const TriMesh& mesh = *mesh_ptr;
   const std::size_t n = mesh.n_vertices();
   stats.vertices = n;
   stats.faces = mesh.n_faces();
@@ -441,11 +451,13 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
         pm.timings.tables_ms = lap_ms(own_clock);
       },
       [&] {
-        build_vertex_adjacency(pm);
+        build_vertex_adjacency(mesh, pm);
+        record_vertex_faces(mesh, pm);
         label_components(pm);
-        measure_boundary_and_box(pm);
+        measure_boundary_and_box(mesh, pm);
         pm.timings.adjacency_ms = lap_ms(clock);
       });
+  mesh_ptr.reset();
   orient_closed_components(pm, options.orient_outward);
   lap_ms(clock);  // the wait for the face tables, if any, is theirs
   // Beside the normals and the curvature field (whose creases and mean curvature are serial):

@@ -14,7 +14,6 @@
 
 #include "engine/curvature.h"
 #include "engine/mesh_io.h"
-#include "engine/tri_mesh.h"
 #include "engine/vertex_index.h"
 
 namespace featureline {
@@ -22,7 +21,7 @@ namespace featureline {
 struct PrepareOptions {
   CurvatureOptions curvature;  ///< the feature field and creases (engine/curvature.h)
   /// Refuse (LimitExceededError) a mesh whose preparation could not stay within this many bytes
-  /// (prepared_bytes_lower_bound of the vertices and kept triangles, checked before anything is
+  /// (preparation_bytes_lower_bound of the vertices and kept triangles, checked before anything is
   /// built and again as vertex copies for non-manifold faces are made); 0: no bound.
   std::size_t max_memory_bytes = 0;
   /// A closed component whose faces point inward (negative signed volume: an exporter's
@@ -98,8 +97,10 @@ VertexFaces build_vertex_faces(const std::vector<std::array<std::uint32_t, 3>>& 
 std::vector<std::array<std::uint32_t, 3>> build_face_neighbors(const std::vector<std::array<std::uint32_t, 3>>& triangles,
                                                                std::size_t n_vertices);
 
+/// Everything a request reads, as flat tables: vertex i is input vertex i (copies made for
+/// non-manifold faces follow the input's vertices). OpenMesh builds the topology while the mesh
+/// is prepared and is dropped afterwards.
 struct PreparedMesh {
-  TriMesh mesh;  ///< vertex i is input vertex i; duplicates made for non-manifold faces follow
   /// Input triangle index of each mesh face (faces keep input order; only dropped ones are missing).
   std::vector<std::uint32_t> source_triangle;
   /// Corner vertex ids of each face in the input's corner order, or with its second and third
@@ -124,6 +125,9 @@ struct PreparedMesh {
   /// (segmentation, the feature strip): faces around each vertex, the face across each edge
   /// (build_face_neighbors), and whether each vertex is on an edge with one face.
   VertexFaces vertex_faces;
+  /// The face a point on vertex v reports (surface_point_at_vertex): the first of OpenMesh's
+  /// circulation around v, as answers have always given; UINT32_MAX for unreferenced vertices.
+  std::vector<std::uint32_t> vertex_face;
   std::vector<std::array<std::uint32_t, 3>> face_neighbors;
   std::vector<char> boundary_vertex;
   /// Nearest-vertex queries over the vertices that belong to a triangle (keys given as points).

@@ -113,10 +113,7 @@ Eigen::Vector3d position_of(const PreparedMesh& mesh, const SurfaceLocation& l) 
 SurfacePoint surface_point_at_vertex(const PreparedMesh& pm, std::uint32_t v) {
   SurfacePoint s;
   s.position = pm.positions[v];
-  // OpenMesh's first face around v (not the lowest face id): the face every answer so far has
-  // reported for points on vertices, so JSON answers stay as they were.
-  const auto f = *pm.mesh.vf_range(TriMesh::VertexHandle(int(v))).begin();
-  s.face = std::uint32_t(f.idx());
+  s.face = pm.vertex_face[v];
   const auto& t = pm.triangles[s.face];
   for (int k = 0; k < 3; ++k) s.barycentric[k] = t[k] == v ? 1.0 : 0.0;
   return s;

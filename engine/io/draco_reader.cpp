@@ -122,7 +122,7 @@ DracoGeometry decode_draco(const unsigned char* data, std::size_t size, std::opt
   const DracoDeclaredCounts declared = read_draco_declared_counts(data, size, context);
   check_vertex_limit(format, declared.vertices, options);
   check_triangle_limit(format, declared.faces, options);
-  const std::size_t needed = prepared_bytes_lower_bound(declared.vertices, declared.faces);
+  const std::size_t needed = preparation_bytes_lower_bound(declared.vertices, declared.faces);
   if (options.memory_budget_bytes != 0 && needed > options.memory_budget_bytes)
     throw LimitExceededError(context + " declares " + std::to_string(declared.faces) + " faces and " +
                              std::to_string(declared.vertices) + " vertices, which need more than " + std::to_string(needed >> 20) +

@@ -135,9 +135,9 @@ ReadMeshOptions read_limits_for(std::size_t max_input_bytes, std::size_t memory_
   constexpr std::size_t min_bytes_per_element = 12;
   const std::size_t by_input = max_input_bytes / min_bytes_per_element;
   ReadMeshOptions options;
-  options.max_vertices = std::max<std::size_t>(1, std::min({options.max_vertices, by_input, memory_budget_bytes / kPreparedBytesPerVertex}));
+  options.max_vertices = std::max<std::size_t>(1, std::min({options.max_vertices, by_input, memory_budget_bytes / kPreparingBytesPerVertex}));
   options.max_triangles =
-      std::max<std::size_t>(1, std::min({options.max_triangles, by_input, memory_budget_bytes / kPreparedBytesPerTriangle}));
+      std::max<std::size_t>(1, std::min({options.max_triangles, by_input, memory_budget_bytes / kPreparingBytesPerTriangle}));
   options.max_file_bytes = max_input_bytes;
   options.memory_budget_bytes = memory_budget_bytes;
   return options;

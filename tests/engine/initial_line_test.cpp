@@ -1,6 +1,7 @@
 // Stage 1: initial lines by marching search, feature path and geodesic.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -117,17 +118,22 @@ TEST(InitialLine, ClosedLoopDoesNotRetraceItself) {
 TEST(InitialLine, FollowsFandiskCreaseChainExactly) {
   const auto mesh = prepare_mesh(read_mesh_file(require_shared_mesh("fandisk.off")));
   // Crease edges: dihedral angle above 30 degrees. Find a long straight-ish run of them.
-  const TriMesh& m = mesh->mesh;
   std::vector<std::vector<std::uint32_t>> crease(mesh->n_vertices());
-  for (auto e : m.edges()) {
-    if (m.is_boundary(e)) continue;
-    if (std::abs(m.calc_dihedral_angle(e)) > 30.0 * M_PI / 180.0) {
-      const auto a = std::uint32_t(m.from_vertex_handle(m.halfedge_handle(e, 0)).idx());
-      const auto b = std::uint32_t(m.to_vertex_handle(m.halfedge_handle(e, 0)).idx());
-      crease[a].push_back(b);
-      crease[b].push_back(a);
+  const auto normal = [&](std::uint32_t f) {
+    const auto& t = mesh->triangles[f];
+    const auto& p = mesh->positions;
+    return Eigen::Vector3d((p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).normalized());
+  };
+  for (std::uint32_t f = 0; f < mesh->triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const auto g = mesh->face_neighbors[f][std::size_t(k)];
+      if (g == UINT32_MAX || g < f) continue;  // each interior edge once
+      if (std::acos(std::clamp(normal(f).dot(normal(g)), -1.0, 1.0)) > 30.0 * M_PI / 180.0) {
+        const auto a = mesh->triangles[f][std::size_t(k)], b = mesh->triangles[f][std::size_t((k + 1) % 3)];
+        crease[a].push_back(b);
+        crease[b].push_back(a);
+      }
     }
-  }
   // Walk a chain of crease vertices of valence 2 in the crease graph.
   std::vector<std::uint32_t> chain;
   for (std::uint32_t v = 0; v < mesh->n_vertices() && chain.size() < 12; ++v) {

@@ -1,5 +1,6 @@
 // The tables prepare_mesh builds once for every request: faces around vertices, the face across
-// each edge, boundary vertices (checked against OpenMesh's own halfedge structure), and the
+// each edge, boundary vertices, the face reported for points on vertices (checked against
+// OpenMesh's own halfedge structure, built from the same triangles), and the
 // nearest-vertex index (checked against known nearest vertices and a scan over every vertex).
 #include <gtest/gtest.h>
 
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "engine/prepared_mesh.h"
+#include "engine/tri_mesh.h"
 #include "tests/support/synthetic_meshes.h"
 
 namespace featureline {
@@ -20,7 +22,11 @@ constexpr std::uint32_t kNone = UINT32_MAX;
 // Every table entry against OpenMesh: the face across each directed face edge, the faces
 // around each vertex, and which vertices are on the boundary.
 void expect_tables_match_openmesh(const PreparedMesh& pm) {
-  const TriMesh& mesh = pm.mesh;
+  TriMesh mesh;
+  for (const auto& p : pm.positions) mesh.add_vertex(TriMesh::Point(p.x(), p.y(), p.z()));
+  for (const auto& t : pm.triangles)
+    ASSERT_TRUE(mesh.add_face(TriMesh::VertexHandle(int(t[0])), TriMesh::VertexHandle(int(t[1])), TriMesh::VertexHandle(int(t[2])))
+                    .is_valid());
   ASSERT_EQ(pm.face_neighbors.size(), pm.triangles.size());
   for (std::uint32_t f = 0; f < pm.triangles.size(); ++f)
     for (int k = 0; k < 3; ++k) {
@@ -39,6 +45,9 @@ void expect_tables_match_openmesh(const PreparedMesh& pm) {
     EXPECT_EQ(std::vector<std::uint32_t>(pm.vertex_faces.begin(id), pm.vertex_faces.end(id)), expected) << "vertex " << id;
     if (!expected.empty()) {
       EXPECT_EQ(pm.boundary_vertex[id] != 0, mesh.is_boundary(v)) << "vertex " << id;
+      EXPECT_EQ(pm.vertex_face[id], std::uint32_t((*mesh.vf_range(v).begin()).idx())) << "vertex " << id;
+    } else {
+      EXPECT_EQ(pm.vertex_face[id], kNone) << "vertex " << id;
     }
   }
 }
