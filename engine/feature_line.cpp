@@ -24,16 +24,6 @@ struct Piece {
   bool noisy_crease = false;  // a crease run on a noisy mesh: re-fitted (engine/crease_fit.h)
 };
 
-// Whether the mesh edge a-b is a crease of the line's kind (any kind when sign is 0).
-bool is_crease_edge(const PreparedMesh& pm, std::uint32_t a, std::uint32_t b, double sign) {
-  for (auto k = pm.neighbor_offsets[a]; k < pm.neighbor_offsets[a + 1]; ++k)
-    if (pm.neighbors[k] == b) {
-      const auto crease = pm.curvature.crease[k];
-      return crease != 0 && (sign == 0 || crease == sign);
-    }
-  return false;
-}
-
 // The share of the piece's edges that are creases of the line's kind. A clean crease run is kept
 // exactly only when every edge is one: a sharp bend sampled by a mesh whose edges do not follow it
 // has scattered short runs of sharp edges beside the true bend, which the snake must still refine.
@@ -41,7 +31,7 @@ bool is_crease_edge(const PreparedMesh& pm, std::uint32_t a, std::uint32_t b, do
 // under the threshold), so there a run that is mostly crease is re-fitted as one.
 double crease_share(const PreparedMesh& pm, const std::vector<std::uint32_t>& line, const Piece& piece, double sign) {
   std::size_t creases = 0;
-  for (std::size_t i = piece.begin; i < piece.end; ++i) creases += is_crease_edge(pm, line[i], line[i + 1], sign);
+  for (std::size_t i = piece.begin; i < piece.end; ++i) creases += pm.is_crease(line[i], line[i + 1], sign);
   return piece.end > piece.begin ? double(creases) / double(piece.end - piece.begin) : 0.0;
 }
 

@@ -31,17 +31,11 @@ std::uint32_t next_around(const PreparedMesh& pm, std::uint32_t center, std::uin
   return kNoIndex;
 }
 
-bool adjacent(const PreparedMesh& pm, std::uint32_t v, std::uint32_t w) {
-  for (auto k = pm.neighbor_offsets[v]; k < pm.neighbor_offsets[v + 1]; ++k)
-    if (pm.neighbors[k] == w) return true;
-  return false;
-}
-
 // Sum of corner angles at `center` swept counter-clockwise from the edge to `from` until the
 // edge to `until` (the faces on the left of a path arriving from `until`... see caller).
 // Returns a negative value when a boundary interrupts the sweep.
 double swept_angle(const PreparedMesh& pm, std::uint32_t center, std::uint32_t from, std::uint32_t until) {
-  if (!adjacent(pm, center, from) || !adjacent(pm, center, until)) return -1;
+  if (!pm.are_neighbors(center, from) || !pm.are_neighbors(center, until)) return -1;
   std::uint32_t spoke = from;
   double sum = 0;
   for (std::size_t guard = 0; guard < 1024; ++guard) {

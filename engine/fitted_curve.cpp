@@ -351,8 +351,7 @@ bool marked_crease_near(const PreparedMesh& pm, const Neighbourhood& ball, const
   for (const std::uint32_t v : vertices) {
     if ((pm.positions[v] - p).norm() > radius) continue;
     for (auto k = pm.neighbor_offsets[v]; k < pm.neighbor_offsets[v + 1]; ++k) {
-      const auto crease = pm.curvature.crease[k];
-      if (crease != 0 && (sign == 0 || crease == sign) && ball.contains(pm.neighbors[k])) return true;
+      if (pm.is_crease_slot(k, sign) && ball.contains(pm.neighbors[k])) return true;
     }
   }
   return false;

@@ -66,14 +66,9 @@ void keep_crease_candidates(const PreparedMesh& mesh, std::uint32_t current, std
                             std::vector<std::uint32_t>& candidates) {
   const auto& on_crease = mesh.curvature.on_crease;
   if (on_crease.empty() || !on_crease[current] || !on_crease[goal]) return;
-  auto is_crease_edge = [&](std::uint32_t v) {
-    for (auto k = mesh.neighbor_offsets[current]; k < mesh.neighbor_offsets[current + 1]; ++k)
-      if (mesh.neighbors[k] == v) return mesh.curvature.crease[k] != 0;
-    return false;
-  };
   std::vector<std::uint32_t> creases, others;
   for (auto v : candidates) {
-    if (is_crease_edge(v)) creases.push_back(v);
+    if (mesh.is_crease(current, v, 0)) creases.push_back(v);
     else if (!on_crease[v]) others.push_back(v);
   }
   if (!creases.empty()) candidates.swap(creases);

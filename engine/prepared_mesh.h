@@ -142,6 +142,25 @@ struct PreparedMesh {
   PrepareTimings timings;
 
   std::size_t n_vertices() const { return positions.size(); }
+  static constexpr std::uint32_t kNoEdge = UINT32_MAX;
+  /// The slot of edge a-b in a's adjacency row (an index into neighbors, neighbor_edge_lengths
+  /// and curvature.crease), or kNoEdge when a and b are not neighbours.
+  std::uint32_t edge_slot(std::uint32_t a, std::uint32_t b) const {
+    for (auto k = neighbor_offsets[a]; k < neighbor_offsets[a + 1]; ++k)
+      if (neighbors[k] == b) return k;
+    return kNoEdge;
+  }
+  bool are_neighbors(std::uint32_t a, std::uint32_t b) const { return edge_slot(a, b) != kNoEdge; }
+  /// Whether the edge in adjacency slot k is a crease of `sign` (+1 ridge, -1 valley; any when 0).
+  bool is_crease_slot(std::uint32_t k, double sign) const {
+    const auto crease = curvature.crease[k];
+    return crease != 0 && (sign == 0 || crease == sign);
+  }
+  /// Whether a-b is an edge and a crease of `sign` (+1 ridge, -1 valley; any when 0).
+  bool is_crease(std::uint32_t a, std::uint32_t b, double sign) const {
+    const auto k = edge_slot(a, b);
+    return k != kNoEdge && is_crease_slot(k, sign);
+  }
   /// The vertex nearest p among those that belong to a triangle (the lowest id among equally
   /// near ones). \pre p is finite.
   std::uint32_t nearest_vertex(const Eigen::Vector3d& p) const { return vertex_index.nearest(p); }

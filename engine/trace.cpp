@@ -242,12 +242,6 @@ class Tracer {
     if (chord.squaredNorm() > 0) walk.direction = tangent_at(mesh_, walk.path.back(), chord);
   }
 
-  bool is_neighbor(std::uint32_t a, std::uint32_t b) const {
-    for (auto k = mesh_.neighbor_offsets[a]; k < mesh_.neighbor_offsets[a + 1]; ++k)
-      if (mesh_.neighbors[k] == b) return true;
-    return false;
-  }
-
   double turn(const Walk& walk, std::uint32_t from, std::uint32_t to) const {
     return angle_between(walk.direction, mesh_.positions[to] - mesh_.positions[from]);
   }
@@ -292,7 +286,7 @@ class Tracer {
     // A rival branch within the margin that is itself a neighbour of the best one closes a
     // triangle with it (noise marking a face's second edge): one crease, not a junction.
     const bool clear = std::all_of(ahead.begin() + 1, ahead.end(), [&](std::uint32_t w) {
-      return turn(walk, c, w) >= best + kJunctionMargin || is_neighbor(ahead[0], w);
+      return turn(walk, c, w) >= best + kJunctionMargin || mesh_.are_neighbors(ahead[0], w);
     });
     const bool follow = options_.follow_junctions && best <= options_.max_turn * kPi / 180 && clear;
     junctions_.push_back({c, branches, follow});

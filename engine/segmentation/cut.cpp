@@ -13,12 +13,6 @@
 namespace featureline {
 namespace {
 
-bool are_neighbors(const PreparedMesh& mesh, std::uint32_t a, std::uint32_t b) {
-  for (auto k = mesh.neighbor_offsets[a]; k < mesh.neighbor_offsets[a + 1]; ++k)
-    if (mesh.neighbors[k] == b) return true;
-  return false;
-}
-
 /// A line's chain of mesh vertices; linked[k]: chain[k-1] -- chain[k] is a mesh edge (not a gap).
 struct VertexChain {
   std::vector<std::uint32_t> vertices;
@@ -35,7 +29,7 @@ void extend_chain(const PreparedMesh& mesh, VertexChain& chain, std::uint32_t v,
   }
   const auto last = chain.vertices.back();
   if (v == last) return;
-  if (are_neighbors(mesh, last, v)) {
+  if (mesh.are_neighbors(last, v)) {
     chain.vertices.push_back(v);
     chain.linked.push_back(1);
     return;

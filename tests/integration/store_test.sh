@@ -80,8 +80,8 @@ check_eq "a path-like id is just unknown" "$STATUS" 404
 stop_server c
 
 # ---- eviction costs a rebuild, not the session ------------------------------------------------------
-# dragon_25k and armadillo_29k prepared take about 4-5 MB each: an 8 MB cache holds one.
-start_server small --data-dir "$T/data2" --cache-mb 8 --quiet || exit 1
+# dragon_25k and armadillo_29k prepared take 3.4 and 4.0 MB: a 6 MB cache holds one.
+start_server small --data-dir "$T/data2" --cache-mb 6 --quiet || exit 1
 upload small "$MESHES/dragon_25k.off"; FIRST=$ID
 line small "$FIRST" '[10, 200, 400]'; FIRST_LINE=$LINE
 upload small "$MESHES/armadillo_29k.obj"
