@@ -58,14 +58,14 @@ json feature_line_to_json(const FeatureLineResult& r) {
   for (const auto& f : r.initial.fallbacks)
     fallbacks.push_back({{"segment", f.segment}, {"from", to_string(f.from)}, {"to", to_string(f.to)}, {"reason", f.reason}});
   // One object per piece, in line order; "reason" is always present, empty unless the piece
-  // kept its initial line (kept == "initial").
+  // kept its initial line (kept: initial).
   json pieces_detail = json::array();
   std::size_t iteration_caps = 0;
   for (const auto& p : r.piece_reports) {
     pieces_detail.push_back({{"from", p.from},
                              {"to", p.to},
                              {"edges", p.edges},
-                             {"kept", p.kept},
+                             {"kept", to_string(p.kept)},
                              {"reason", p.reason},
                              {"iterations", p.iterations},
                              {"iteration_cap", p.iteration_cap},

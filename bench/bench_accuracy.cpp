@@ -443,7 +443,7 @@ void trace_line(const std::string& name, double noise, int seed, double estimate
                arc_length_distance(refined, r.closed, spec.distance).mean, floor);
   for (const auto& w : r.warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
   for (const auto& p : r.piece_reports)
-    std::fprintf(stderr, "  piece %u..%u (%zu edges): %s%s%s, %d iterations%s\n", p.from, p.to, p.edges, p.kept.c_str(),
+    std::fprintf(stderr, "  piece %u..%u (%zu edges): %s%s%s, %d iterations%s\n", p.from, p.to, p.edges, to_string(p.kept).c_str(),
                  p.reason.empty() ? "" : ": ", p.reason.c_str(), p.iterations, p.iteration_cap ? " (cap)" : "");
   const std::size_t step = std::max<std::size_t>(1, refined.size() / 40);
   for (std::size_t i = 0; i < refined.size(); i += step)

@@ -79,9 +79,9 @@ std::deque<Piece> pinned_pieces(const UnrolledLine& line, bool pin_interior_keys
 // Clean creases are the feature itself: their runs are kept exactly. On a noisy mesh a crease
 // run is re-fitted instead of handed to the snake (see engine/crease_fit.h for why).
 void mark_crease_pieces(const PreparedMesh& pm, const FeatureLineOptions& options, const std::vector<std::uint32_t>& line,
-                        double feature_sign, std::deque<Piece>& pieces) {
+                        double feature_sign, bool noisy_mesh, std::deque<Piece>& pieces) {
   if (options.exact_crease_edges <= 0) return;
-  const bool clean = pm.curvature.noise < options.exact_crease_noise;
+  const bool clean = !noisy_mesh;
   for (Piece& piece : pieces) {
     const bool long_enough = piece.end - piece.begin >= std::size_t(options.exact_crease_edges);
     const double share = long_enough ? crease_share(pm, line, piece, feature_sign) : 0.0;
@@ -95,6 +95,9 @@ struct LineRun {
   const PreparedMesh& pm;
   const FeatureLineOptions& options;
   const SnakeOptions& snake;  ///< the request's, with the line's feature sign
+  /// The mesh's estimated noise is at or above options.exact_crease_noise: crease runs are
+  /// re-fitted rather than kept, and the automatic layout tolerates fewer dropped triangles.
+  bool noisy_mesh;
   const Cancellation* cancel;
   const std::vector<std::uint32_t>& line;  ///< unrolled
 };
@@ -164,7 +167,7 @@ PieceWork start_piece(const LineRun& run, const Piece& piece) {
 
 void keep_initial(PieceWork& work, std::string reason) {
   work.points = work.initial_points;
-  work.report.kept = "initial";
+  work.report.kept = PieceKept::initial;
   work.report.reason = std::move(reason);
 }
 
@@ -306,11 +309,11 @@ void refine_again_nearer(const LineRun& run, PieceWork& work, FeatureLineResult&
   PieceWork second = work;
   second.sub = path;
   const FeatureStrip strip = extract_feature_strip(run.pm, path, run.options.strip);
-  const FlatStrip flat = flatten_strip(run.pm, strip, run.options.strip);
+  const FlatStrip flat = flatten_strip(run.pm, strip, run.options.strip, run.noisy_mesh);
   if (flat.flipped_near_line > 0) return;
   FeatureLineResult tally;  // the second pass's iterations and warnings count only when it is kept
   snake_on_strip(run, strip, flat, second, tally);
-  if (second.report.kept != "refined" || !(second.report.refined_strength > work.report.refined_strength)) return;
+  if (second.report.kept != PieceKept::refined || !(second.report.refined_strength > work.report.refined_strength)) return;
   work = std::move(second);
   result.iterations += tally.iterations;
   result.strip_faces += strip.triangles.size();
@@ -329,7 +332,7 @@ bool refine_piece_with_snake(const LineRun& run, PieceWork& work, std::deque<Pie
   if (layout.flattening == StripFlattening::automatic &&
       strip_feature_strength(run.pm, strip, run.snake) < run.snake.featureless_below)
     layout.flattening = StripFlattening::similar_triangles;
-  const FlatStrip flat = flatten_strip(run.pm, strip, layout);
+  const FlatStrip flat = flatten_strip(run.pm, strip, layout, run.noisy_mesh);
   result.timings.flatten_ms += ms_since(t0);
   if (split_where_folded(run, work.piece, flat, pieces)) {
     ++result.splits;
@@ -339,7 +342,7 @@ bool refine_piece_with_snake(const LineRun& run, PieceWork& work, std::deque<Pie
     result.warnings.push_back("the strip around line vertices " + std::to_string(work.sub.front()) + ".." +
                               std::to_string(work.sub.back()) + " folds over when flattened; refined where it is valid");
   t0 = Clock::now();
-  if (snake_on_strip(run, strip, flat, work, result) && work.report.kept == "refined" && run.options.second_strip)
+  if (snake_on_strip(run, strip, flat, work, result) && work.report.kept == PieceKept::refined && run.options.second_strip)
     refine_again_nearer(run, work, result);
   result.timings.snake_ms += ms_since(t0);
   result.strip_faces += strip.triangles.size();
@@ -351,10 +354,10 @@ bool refine_piece_with_snake(const LineRun& run, PieceWork& work, std::deque<Pie
 bool refine_piece(const LineRun& run, PieceWork& work, std::deque<Piece>& pieces, FeatureLineResult& result) {
   if (work.piece.exact) {
     work.points = work.initial_points;
-    work.report.kept = "crease";
+    work.report.kept = PieceKept::crease;
   } else if (work.piece.noisy_crease) {
     work.points = fit_noisy_crease(run.pm, work.sub, run.options.crease_fit).points;
-    work.report.kept = "crease fit";
+    work.report.kept = PieceKept::crease_fit;
     work.report.refined_strength = mean_feature_strength(run.pm, work.points, run.snake.feature_sign, run.snake.curvature_cap);
   } else if (work.sub.size() < 3) {
     keep_initial(work, "a single edge");  // a single edge is already straight on the surface
@@ -506,7 +509,8 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
 
   std::deque<Piece> pieces = pinned_pieces(line, options.pin_interior_keys, closed, result.warnings);
   const SnakeOptions snake_options = line_snake_options(pm, request, result);
-  mark_crease_pieces(pm, options, line.vertices, snake_options.feature_sign, pieces);
+  const bool noisy_mesh = pm.curvature.noise >= options.exact_crease_noise;
+  mark_crease_pieces(pm, options, line.vertices, snake_options.feature_sign, noisy_mesh, pieces);
   std::vector<std::size_t> crease_pins;
   for (const Piece& piece : pieces)
     if (piece.exact || piece.noisy_crease) crease_pins.insert(crease_pins.end(), {piece.begin, piece.end});
@@ -514,7 +518,7 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
     for (const std::size_t index : std::vector<std::size_t>(crease_pins))
       if (index == 0 || index + 1 == line.vertices.size()) crease_pins.insert(crease_pins.end(), {0, line.vertices.size() - 1});
   Pins pins(line.vertices.size(), closed);
-  const LineRun run{pm, options, snake_options, request.cancel, line.vertices};
+  const LineRun run{pm, options, snake_options, noisy_mesh, request.cancel, line.vertices};
   std::vector<SurfacePoint>& refined = result.refined;
   std::vector<char> exact;  // per refined point: on an exact crease run (the fitted curve keeps those)
   while (!pieces.empty()) {

@@ -73,14 +73,26 @@ struct FeatureLineRequest {
   const Cancellation* cancel = nullptr;
 };
 
+/// Which line a piece of the answer is.
+enum class PieceKept {
+  refined,     ///< the snake's line (crest-localised when CrestOptions::enabled)
+  initial,     ///< the initial line: the snake's was worse, the piece is one edge, or its strip could not be refined
+  crease,      ///< an exact crease run of a clean mesh, as it is
+  crease_fit,  ///< a noisy crease run re-fitted by engine/crease_fit.h
+};
+template <>
+struct EnumNames<PieceKept> {
+  static constexpr std::array<std::pair<PieceKept, const char*>, 4> entries{{{PieceKept::refined, "refined"},
+                                                                            {PieceKept::initial, "initial"},
+                                                                            {PieceKept::crease, "crease"},
+                                                                            {PieceKept::crease_fit, "crease fit"}}};
+};
+
 /// How one piece of the line (between pinned points) was produced.
 struct PieceReport {
   std::uint32_t from = 0, to = 0;  ///< mesh vertices at its ends
   std::size_t edges = 0;           ///< initial line edges in it
-  /// "refined" (the snake's line), "crease" (an exact crease run), "crease fit" (a noisy crease
-  /// run re-fitted by engine/crease_fit.h), "initial" (the snake's line
-  /// was worse, or the piece is a single edge, or the strip could not be refined)
-  std::string kept = "refined";
+  PieceKept kept = PieceKept::refined;
   std::string reason;              ///< why the initial line was kept
   int iterations = 0;              ///< snake iterations
   bool iteration_cap = false;      ///< the snake stopped at its iteration cap, not converged

@@ -368,7 +368,7 @@ void mark_valid_triangles(const PreparedMesh& pm, const FeatureStrip& strip, con
 
 }  // namespace
 
-FlatStrip flatten_strip(const PreparedMesh& pm, const FeatureStrip& strip, const StripOptions& options) {
+FlatStrip flatten_strip(const PreparedMesh& pm, const FeatureStrip& strip, const StripOptions& options, bool noisy_mesh) {
   const std::size_t n = strip.vertices.size();
   const auto unplaced = [n] {
     FlatStrip flat;
@@ -392,10 +392,8 @@ FlatStrip flatten_strip(const PreparedMesh& pm, const FeatureStrip& strip, const
     // losing 3-5% keep the paper's layout, 0.133 when they are solved (the same as solving
     // every strip); no other figure moves between 1%, 3% and 5%. On a scan as clean as the
     // bunny (0.021) a 3% threshold solved more lines for nothing: its median 3-key line went
-    // from 1.8 to 2.2 ms (bench_pipeline, quiet machine). Noisy here means what the crease fit
-    // calls noisy (FeatureLineOptions::exact_crease_noise's default).
-    constexpr double kNoisyMesh = 0.035;
-    const double max_dropped_share = pm.curvature.noise >= kNoisyMesh ? 0.03 : 0.05;
+    // from 1.8 to 2.2 ms (bench_pipeline, quiet machine).
+    const double max_dropped_share = noisy_mesh ? 0.03 : 0.05;
     const double dropped = double(paper->distorted_triangles + paper->flipped_triangles);
     if (options.flattening == StripFlattening::similar_triangles ||
         dropped <= max_dropped_share * double(strip.triangles.size()))

@@ -93,8 +93,11 @@ struct FlatStrip {
 
 /// Lays the strip out in the plane (StripOptions::flattening), then marks the triangles the
 /// snake may use: placed, not folded over, edges within max_edge_distortion of their 3D
-/// lengths.
-FlatStrip flatten_strip(const PreparedMesh& mesh, const FeatureStrip& strip, const StripOptions& options = {});
+/// lengths. `noisy_mesh`: the line treats the mesh as noisy (detect_feature_line decides it once
+/// per line, from FeatureLineOptions::exact_crease_noise); the automatic layout then solves
+/// strips that the paper's layout leaves 3% of, instead of 5%.
+FlatStrip flatten_strip(const PreparedMesh& mesh, const FeatureStrip& strip, const StripOptions& options,
+                        bool noisy_mesh);
 
 /// The plane polyline of the line's vertices, turning angles from the surface (exposed for tests).
 std::vector<Eigen::Vector2d> embed_line(const PreparedMesh& mesh, const std::vector<std::uint32_t>& line);

@@ -193,7 +193,7 @@ TEST(Accuracy, CleanCreasesAreFollowedExactlyThroughTightCorners) {
     open.keys = {loop[q / 2], loop[q], loop[q + q / 2 + 2]};
     const auto line = detect_feature_line(*mesh, open);
     EXPECT_LT(max_distance_to_outline(part, line, unit), 0.02);
-    for (const auto& piece : line.piece_reports) EXPECT_EQ(piece.kept, "crease");
+    for (const auto& piece : line.piece_reports) EXPECT_EQ(piece.kept, PieceKept::crease);
     // The whole outline as a closed line with four keys.
     FeatureLineRequest closed;
     closed.closed = true;
@@ -272,7 +272,7 @@ TEST(Accuracy, NoisyRealCadCreasesAreRefittedCloserToTheTrueCrease) {
     request.keys = chain.closed ? std::vector<std::uint32_t>{v[0], v[n / 3], v[2 * n / 3]}
                                 : std::vector<std::uint32_t>{v.front(), v[n / 2], v.back()};
     const auto result = detect_feature_line(*mesh, request);
-    for (const auto& piece : result.piece_reports) fitted += piece.kept == "crease fit";
+    for (const auto& piece : result.piece_reports) fitted += piece.kept == PieceKept::crease_fit;
     double initial = 0, refined = 0;
     for (const auto& p : result.initial_points) initial += distance_to_polyline(truth, chain.closed, p);
     for (const auto& p : result.refined) refined += distance_to_polyline(truth, chain.closed, p.position);

@@ -112,7 +112,7 @@ TEST(CrestLocalization, CleanCreasesStayExactWithKeysFreeToMove) {
       const auto line = detect_feature_line(*mesh, *request);
       for (const auto& p : line.refined) EXPECT_LT(distance_to_polyline(truth, true, p.position), 1e-9);
       for (const double move : line.key_moves) EXPECT_EQ(move, 0.0);
-      for (const auto& piece : line.piece_reports) EXPECT_EQ(piece.kept, "crease");
+      for (const auto& piece : line.piece_reports) EXPECT_EQ(piece.kept, PieceKept::crease);
     }
   }
 }
