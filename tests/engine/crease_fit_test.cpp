@@ -1,0 +1,132 @@
+// The noisy-crease fit (engine/crease_fit.h) on the rounded slab, whose top outline is a chain
+// of crease edges known exactly: on the clean part a straight run comes back as its vertices and
+// the whole outline stays within a small fraction of an edge; on a noisy copy the fitted points
+// are nearer the clean outline than the noisy vertices are; the options do what they say; and
+// the nearest surface point near a vertex is the orthogonal projection where there is one.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "engine/crease_fit.h"
+#include "engine/prepared_mesh.h"
+#include "tests/support/accuracy_meshes.h"
+
+namespace featureline {
+namespace {
+
+using namespace featureline::testing;
+
+CadPart fine_slab() {
+  RoundedSlabOptions options;
+  options.tessellation = SlabTessellation::fine;
+  return make_rounded_slab(options);
+}
+
+// The chain from outline vertex `first` over `count` vertices (wrapping round the loop).
+std::vector<std::uint32_t> outline_run(const CadPart& part, std::size_t first, std::size_t count) {
+  std::vector<std::uint32_t> run;
+  for (std::size_t k = 0; k < count; ++k) run.push_back(part.top_outline[(first + k) % part.top_outline.size()]);
+  return run;
+}
+
+std::vector<Eigen::Vector3d> positions(const std::vector<SurfacePoint>& points) {
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& p : points) out.push_back(p.position);
+  return out;
+}
+
+double mean_distance_to(const std::vector<Eigen::Vector3d>& truth, const std::vector<Eigen::Vector3d>& points) {
+  double sum = 0;
+  for (const auto& p : points) sum += distance_to_polyline(truth, /*closed=*/true, p);
+  return sum / double(points.size());
+}
+
+TEST(CreaseFit, AStraightCleanRunComesBackAsItsVertices) {
+  const CadPart part = fine_slab();
+  const auto mesh = prepare_mesh(part.mesh);
+  // The outline starts at the bottom end of the straight side x = +a: its first 12 vertices are
+  // on that side, a straight line, which a local quadratic reproduces exactly.
+  const auto chain = outline_run(part, 0, 12);
+  const CreaseFitResult fit = fit_noisy_crease(*mesh, chain);
+  ASSERT_EQ(fit.points.size(), chain.size());
+  for (std::size_t i = 0; i < chain.size(); ++i)
+    EXPECT_LT((fit.points[i].position - mesh->positions[chain[i]]).norm(), 1e-9 * part.mean_edge_length) << "point " << i;
+  EXPECT_EQ(fit.kept_vertices, 0u);
+  EXPECT_LT(fit.mean_shift, 1e-9);
+}
+
+TEST(CreaseFit, TheCleanOutlineStaysOnTheOutline) {
+  const CadPart part = fine_slab();
+  const auto mesh = prepare_mesh(part.mesh);
+  const auto truth = positions_of(part.mesh, part.top_outline);
+  // A run over a rounded corner (radius about 1.6 edges, tighter than the fit's bandwidth): the
+  // quadratic's bias through the bend, half of it taken (step 0.5), stays under a tenth of an
+  // edge (0.08 measured at the corner's middle).
+  const std::size_t side = part.top_outline.size() / 4;
+  const auto chain = outline_run(part, side / 2, side);
+  const CreaseFitResult fit = fit_noisy_crease(*mesh, chain);
+  ASSERT_EQ(fit.points.size(), chain.size());
+  for (std::size_t i = 0; i < chain.size(); ++i)
+    EXPECT_LT(distance_to_polyline(truth, true, fit.points[i].position), 0.1 * part.mean_edge_length) << "point " << i;
+}
+
+TEST(CreaseFit, OnANoisyCopyThePointsAreNearerTheTrueCreaseThanTheVertices) {
+  const CadPart part = fine_slab();
+  const auto truth = positions_of(part.mesh, part.top_outline);
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    const auto noisy = prepare_mesh(with_noise(part.mesh, 0.1, seed));
+    const auto chain = outline_run(part, 3, part.top_outline.size() / 2);
+    const CreaseFitResult fit = fit_noisy_crease(*noisy, chain);
+    ASSERT_EQ(fit.points.size(), chain.size());
+    std::vector<Eigen::Vector3d> vertices;
+    for (auto v : chain) vertices.push_back(noisy->positions[v]);
+    const double before = mean_distance_to(truth, vertices), after = mean_distance_to(truth, positions(fit.points));
+    EXPECT_LT(after, 0.95 * before) << "seed " << seed << ": vertices " << before << ", fitted " << after;
+    // The ends are the chain's end vertices, unchanged (they are pinned keys).
+    EXPECT_EQ(fit.points.front().position, noisy->positions[chain.front()]);
+    EXPECT_EQ(fit.points.back().position, noisy->positions[chain.back()]);
+    EXPECT_GT(fit.mean_shift, 0);
+  }
+}
+
+TEST(CreaseFit, ZeroBandwidthReturnsTheVerticesAndATinyShiftKeepsThem) {
+  const CadPart part = fine_slab();
+  const auto noisy = prepare_mesh(with_noise(part.mesh, 0.1, 7));
+  const auto chain = outline_run(part, 3, 20);
+  CreaseFitOptions off;
+  off.bandwidth = 0;
+  const CreaseFitResult unchanged = fit_noisy_crease(*noisy, chain, off);
+  ASSERT_EQ(unchanged.points.size(), chain.size());
+  for (std::size_t i = 0; i < chain.size(); ++i) EXPECT_EQ(unchanged.points[i].position, noisy->positions[chain[i]]);
+  CreaseFitOptions held;
+  held.max_shift = 1e-9;  // every interior vertex's fit moves it further: all are kept
+  const CreaseFitResult kept = fit_noisy_crease(*noisy, chain, held);
+  EXPECT_EQ(kept.kept_vertices, chain.size() - 2);
+  for (std::size_t i = 0; i < chain.size(); ++i) EXPECT_EQ(kept.points[i].position, noisy->positions[chain[i]]);
+}
+
+TEST(CreaseFit, NearestSurfacePointNearAVertexIsItsProjectionOntoTheTop) {
+  const CadPart part = fine_slab();
+  const auto mesh = prepare_mesh(part.mesh);
+  // A top-cap vertex away from the outline: the flat cap at z = h lies all around it.
+  std::uint32_t v = 0;
+  double best = HUGE_VAL;
+  for (std::uint32_t w = 0; w < mesh->n_vertices(); ++w) {
+    const auto& p = mesh->positions[w];
+    const double d = p.head<2>().norm();
+    if (std::abs(p.z() - 0.4) < 1e-12 && d < best) best = d, v = w;
+  }
+  const Eigen::Vector3d above = mesh->positions[v] + Eigen::Vector3d(0.3, -0.2, 1.0) * 0.1 * part.mean_edge_length;
+  const SurfacePoint s = nearest_surface_point_near(*mesh, v, above);
+  EXPECT_NEAR(s.position.z(), 0.4, 1e-12);
+  EXPECT_NEAR(s.position.x(), above.x(), 1e-9);
+  EXPECT_NEAR(s.position.y(), above.y(), 1e-9);
+  EXPECT_NEAR(s.barycentric[0] + s.barycentric[1] + s.barycentric[2], 1.0, 1e-12);
+  Eigen::Vector3d from_barycentric = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 3; ++k) from_barycentric += s.barycentric[k] * mesh->positions[mesh->triangles[s.face][std::size_t(k)]];
+  EXPECT_LT((from_barycentric - s.position).norm(), 1e-12);
+}
+
+}  // namespace
+}  // namespace featureline
