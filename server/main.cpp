@@ -36,7 +36,7 @@ void add_flags(CLI::App& app, ServerOptions& o, std::string& port_file) {
       ->check(count(1e6))->capture_default_str();
   app.add_option("--http-threads", o.http_threads, "Connection workers (each keep-alive connection holds one)")
       ->check(within(2, 4096))->capture_default_str();
-  app.add_option("--cache-mb", o.cache_mb, "Byte budget of prepared meshes, MiB")->check(count(1 << 20))->capture_default_str();
+  app.add_option("--cache-mb", o.cache_mb, "Byte budget of prepared meshes and the engine's per-thread scratch, MiB")->check(count(1 << 20))->capture_default_str();
   app.add_option("--ttl-s", o.ttl_s, "Idle seconds before a mesh session expires")->check(count(365 * 86400))->capture_default_str();
   app.add_option("--max-upload-mb", o.max_upload_mb, "Largest accepted upload, MiB")->check(count(1 << 16))->capture_default_str();
   app.add_option("--deadline-s", o.deadline_s, "Longest a request may wait for the engine, s")->check(count(3600))->capture_default_str();

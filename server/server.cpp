@@ -14,6 +14,7 @@
 #include "engine/feature_line.h"
 #include "engine/mesh_io.h"
 #include "engine/segmentation.h"
+#include "engine/scratch_memory.h"
 
 #include <httplib.h>
 #include <nlohmann/json.hpp>
@@ -205,7 +206,8 @@ struct FeaturelineServer::Impl {
       : options(std::move(o)),
         http(transport_limits(options, [this](const ErrorReply& refusal) { record_transport_refusal(refusal); })),
         read_limits(upload_read_limits(options)),
-        cache(SessionCache::Options{options.cache_mb << 20, std::chrono::seconds(options.ttl_s), [] { return Clock::now(); }}),
+        cache(SessionCache::Options{options.cache_mb << 20, std::chrono::seconds(options.ttl_s), [] { return Clock::now(); },
+                                    engine_scratch_bytes}),
         pool(options.engine_threads, options.queue_capacity),
         sessions(cache, open_store(options, breaker), [this](std::shared_ptr<const StoredUpload> upload) { return rebuild(std::move(upload)); },
                  {store_touch_interval(options)}) {
@@ -498,6 +500,8 @@ struct FeaturelineServer::Impl {
           {"featureline_cache_entries", {"Prepared meshes in the session cache.", double(s.entries)}},
           {"featureline_cache_bytes", {"Bytes held by the session cache.", double(s.bytes)}},
           {"featureline_cache_budget_bytes", {"Byte budget of the session cache.", double(options.cache_mb << 20)}},
+          {"featureline_engine_scratch_bytes",
+           {"Per-thread engine scratch kept between requests; counts in the cache's budget.", double(engine_scratch_bytes())}},
           {"featureline_cache_evictions_total", {"Sessions evicted to stay within the budget.", double(s.evictions)}},
           {"featureline_cache_expirations_total", {"Sessions expired after their idle time.", double(s.expirations)}},
           {"featureline_cache_inserts_total", {"Meshes uploaded and prepared.", double(s.inserts)}},

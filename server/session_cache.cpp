@@ -67,7 +67,8 @@ std::optional<std::shared_ptr<const MeshSession>> SessionCache::insert(MeshSessi
   } else if (auto existing = entries_.find(session.id); existing != entries_.end()) {
     return existing->second.session;
   }
-  while (!lru_.empty() && bytes_ + session.bytes > options_.byte_budget) {
+  const std::size_t other = options_.other_bytes ? options_.other_bytes() : 0;
+  while (!lru_.empty() && bytes_ + session.bytes + other > options_.byte_budget) {
     auto it = entries_.find(lru_.back());
     bytes_ -= it->second.session->bytes;
     remember_gone(it->first, Miss::evicted);

@@ -47,6 +47,9 @@ class SessionCache {
     std::size_t byte_budget = std::size_t(1) << 30;   ///< evict least recently used beyond this
     std::chrono::seconds idle_ttl{1800};              ///< a session unused this long expires
     std::function<Clock::time_point()> now = [] { return Clock::now(); };  ///< injectable for tests
+    /// Memory outside the sessions that the budget must leave room for (the server passes the
+    /// engine's per-thread scratch, engine/scratch_memory.h): evictions make room for it too.
+    std::function<std::size_t()> other_bytes;
   };
 
   struct Stats {

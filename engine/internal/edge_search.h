@@ -13,6 +13,7 @@
 
 #include "engine/cancellation.h"
 #include "engine/prepared_mesh.h"
+#include "engine/scratch_memory.h"
 
 namespace featureline {
 
@@ -29,12 +30,22 @@ struct SearchScratch {
   std::vector<Label> labels;
   std::uint32_t generation = 0;
 
+  SearchScratch() = default;
+  SearchScratch(const SearchScratch&) = delete;
+  SearchScratch& operator=(const SearchScratch&) = delete;
+  ~SearchScratch() { account_scratch_bytes(-bytes()); }
+  std::ptrdiff_t bytes() const {
+    return std::ptrdiff_t(state.capacity() * sizeof(std::uint32_t) + labels.capacity() * sizeof(Label));
+  }
+
   /// Starts a new query over n vertices.
   void begin(std::size_t n) {
     if (state.size() < n) {
+      const std::ptrdiff_t before = bytes();
       state.assign(n, 0);
       labels.assign(n, Label{0, 0});
       generation = 0;
+      account_scratch_bytes(bytes() - before);
     }
     if (++generation == (1u << 31)) {  // wrapped: clear once every 2 billion queries
       std::fill(state.begin(), state.end(), 0);

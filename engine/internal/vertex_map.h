@@ -8,13 +8,24 @@
 #include <cstdint>
 #include <vector>
 
+#include "engine/scratch_memory.h"
+
 namespace featureline {
 
 class StampedMap {
  public:
+  StampedMap() = default;
+  StampedMap(const StampedMap&) = delete;
+  StampedMap& operator=(const StampedMap&) = delete;
+  ~StampedMap() { account_scratch_bytes(-bytes()); }
+
   /// Starts an empty map over ids below n.
   void begin(std::size_t n) {
-    if (slots_.size() < n) slots_.assign(n, 0);
+    if (slots_.size() < n) {
+      const std::ptrdiff_t before = bytes();
+      slots_.assign(n, 0);
+      account_scratch_bytes(bytes() - before);
+    }
     if (++generation_ == 0) {  // wrapped: clear once every 4 billion uses
       std::fill(slots_.begin(), slots_.end(), 0);
       generation_ = 1;
@@ -26,6 +37,8 @@ class StampedMap {
   void set(std::uint32_t id, std::uint32_t value) { slots_[id] = (std::uint64_t(generation_) << 32) | value; }
 
  private:
+  std::ptrdiff_t bytes() const { return std::ptrdiff_t(slots_.capacity() * sizeof(std::uint64_t)); }
+
   std::vector<std::uint64_t> slots_;
   std::uint32_t generation_ = 0;
 };

@@ -9,6 +9,7 @@
 #include "engine/errors.h"
 #include "engine/feature_line.h"
 #include "engine/mesh_io.h"
+#include "engine/scratch_memory.h"
 #include "tests/support/accuracy_meshes.h"
 #include "tests/support/line_metrics.h"
 #include "tests/support/synthetic_meshes.h"
@@ -54,6 +55,25 @@ TEST(FeatureLine, FreeKeysLoopIsRefinedInTwoHalves) {
   const auto result = detect_feature_line(*mesh, request);
   EXPECT_EQ(result.pieces, 2u);
   EXPECT_EQ(result.initial.vertices.size(), 48u);
+}
+
+TEST(FeatureLine, ThreadScratchIsCountedWhileItsThreadLivesAndReleasedAfter) {
+  const auto field = make_ridge_field(61, 0.2, 1, 0.3, 0.25, 0.2);
+  const auto mesh = prepare_mesh(field.mesh);
+  FeatureLineRequest request;
+  request.keys = {nearest_vertex(field.mesh, -0.7, field.crest(-0.7)), nearest_vertex(field.mesh, 0.7, field.crest(0.7))};
+  const std::size_t before = engine_scratch_bytes();
+  std::size_t during = 0;
+  std::thread worker([&] {
+    detect_feature_line(*mesh, request);
+    during = engine_scratch_bytes();
+  });
+  worker.join();
+  // At least the path search's labels (4 + 16 bytes a vertex) and the strip's stamped vertex
+  // and face maps (8 bytes an element), sized to the mesh.
+  const std::size_t at_least = mesh->n_vertices() * (20 + 8) + mesh->triangles.size() * 8;
+  EXPECT_GE(during - before, at_least);
+  EXPECT_EQ(engine_scratch_bytes(), before);  // the thread's scratch went with it
 }
 
 TEST(FeatureLine, NoRefineReturnsTheInitialLineOnVertices) {

@@ -56,6 +56,23 @@ TEST(SessionCache, EvictsLeastRecentlyUsedBeyondBudget) {
   EXPECT_EQ(stats.evictions, 1u);
 }
 
+TEST(SessionCache, MemoryOutsideTheSessionsCountsInTheBudget) {
+  FakeClock clock;
+  std::size_t scratch = 0;
+  SessionCache cache({1000, std::chrono::seconds(60), clock.fn(), [&scratch] { return scratch; }});
+  const auto a = (*cache.insert(session_of_bytes(400)))->id;
+  const auto b = (*cache.insert(session_of_bytes(400)))->id;
+  EXPECT_EQ(cache.stats().evictions, 0u);
+  scratch = 300;  // 400 + 400 + 300 > 1000: the next insert makes room for the scratch too
+  const auto c = (*cache.insert(session_of_bytes(200)))->id;
+  SessionCache::Miss why = SessionCache::Miss::unknown;
+  EXPECT_EQ(cache.find(a, &why), nullptr);
+  EXPECT_EQ(why, SessionCache::Miss::evicted);
+  EXPECT_NE(cache.find(b), nullptr);
+  EXPECT_NE(cache.find(c), nullptr);
+  EXPECT_EQ(cache.stats().bytes, 600u);  // what the sessions hold; the scratch is not theirs
+}
+
 TEST(SessionCache, RefusesASessionLargerThanTheWholeBudget) {
   SessionCache cache({1000, std::chrono::seconds(60)});
   EXPECT_FALSE(cache.insert(session_of_bytes(1001)).has_value());
