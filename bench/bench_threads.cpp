@@ -3,7 +3,8 @@
 // (server/work_pool.h, --threads threads, default 8), whose threads are also the executor the
 // engine splits its loops over. A sampler reads the process's thread count (Threads: in
 // /proc/self/status) every 200 us; the peak, the count at rest and the wall time of each round
-// are printed, with the process's peak resident memory (VmHWM) at the end.
+// are printed, with the prepared meshes' memory per triangle (memory_bytes, what the cache's
+// budget counts) and the process's peak resident memory (VmHWM) at the end.
 //
 // usage: bench_threads [--jobs N] [--threads T] [--rounds R] [MESH ...]
 #include <algorithm>
@@ -90,18 +91,26 @@ int main(int argc, char** argv) {
   for (int round = 1; round <= rounds; ++round) {
     sampler.take_peak();
     const auto start = Clock::now();
+    // Each job answers its prepared mesh's memory_bytes (what the cache's budget counts).
     std::vector<std::future<std::size_t>> done;
     for (std::size_t j = 0; j < jobs; ++j) {
       const RawMesh& raw = meshes[j % meshes.size()];
       done.push_back(std::move(*pool.try_submit([&raw, &pool] {
         PrepareOptions options;
         options.executor = &pool;  // as the server passes its own pool
-        return prepare_mesh(raw, options)->statistics.vertices;
+        return prepare_mesh(raw, options)->memory_bytes();
       })));
     }
-    for (auto& d : done) d.get();
+    std::size_t prepared_bytes = 0, prepared_triangles = 0;
+    for (std::size_t j = 0; j < done.size(); ++j) {
+      prepared_bytes += done[j].get();
+      prepared_triangles += meshes[j % meshes.size()].triangles.size();
+    }
     const double wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     std::printf("%5d %12ld %8.0f\n", round, sampler.take_peak(), wall_ms);
+    if (round == rounds)
+      std::printf("\nprepared meshes: %.1f bytes per triangle (memory_bytes over all %zu)\n",
+                  double(prepared_bytes) / double(prepared_triangles), done.size());
   }
   std::printf("\npeak resident memory (VmHWM): %ld MB\n", status_field("VmHWM") / 1024);
   return 0;
