@@ -15,6 +15,7 @@
 #include "engine/mesh_io.h"
 #include "engine/segmentation.h"
 #include "engine/scratch_memory.h"
+#include "engine/valid_range.h"
 
 #include <httplib.h>
 #include <nlohmann/json.hpp>
@@ -341,19 +342,28 @@ struct FeaturelineServer::Impl {
   auto run_on_pool(Job job) {
     const auto deadline = request_deadline();
     const auto cancel = std::make_shared<Cancellation>(deadline);
-    auto future = pool.try_submit([job = std::move(job), cancel]() mutable { return job(cancel.get()); });
+    auto future = submit_or_503([job = std::move(job), cancel]() mutable { return job(cancel.get()); });
+    if (future.wait_until(deadline) != std::future_status::ready) {
+      cancel->cancel();
+      throw_past_deadline();
+    }
+    return future.get();  // rethrows what the job threw
+  }
+
+  // The engine pool's two refusals, worded and counted in one place.
+  template <typename Task>
+  auto submit_or_503(Task task) {
+    auto future = pool.try_submit(std::move(task));
     if (!future) {
       metrics.record_rejected("queue_full");
       throw HttpError(503, "overloaded", "the server is busy; retry shortly", {{"Retry-After", "1"}});
     }
-    if (future->wait_until(deadline) != std::future_status::ready) {
-      cancel->cancel();
-      metrics.record_rejected("deadline");
-      throw HttpError(503, "deadline_exceeded",
-                      "the request took longer than the server's deadline of " + std::to_string(options.deadline_s) + " s",
-                      {{"Retry-After", "5"}});
-    }
-    return future->get();  // rethrows what the job threw
+    return std::move(*future);
+  }
+  [[noreturn]] void throw_past_deadline() {
+    metrics.record_rejected("deadline");
+    throw HttpError(503, "deadline_exceeded", "the request took longer than the server's deadline of " + format_number(options.deadline_s) + " s",
+                    {{"Retry-After", "5"}});
   }
 
   // A session from the cache, or rebuilt from the upload store (a 503 when the store is down).
@@ -833,22 +843,14 @@ struct FeaturelineServer::Impl {
     std::vector<std::future<Timed>> futures;
     for (auto line : lines) {
       line.cancel = cancel.get();
-      auto future = pool.try_submit([session, line, cancel, queued = Clock::now()] {
+      futures.push_back(submit_or_503([session, line, cancel, queued = Clock::now()] {
         const double waited = std::chrono::duration<double, std::milli>(Clock::now() - queued).count();
         return Timed{detect_feature_line(*session->mesh, line), waited};
-      });
-      if (!future) {
-        metrics.record_rejected("queue_full");
-        throw HttpError(503, "overloaded", "the server is busy; retry shortly", {{"Retry-After", "1"}});
-      }
-      futures.push_back(std::move(*future));
+      }));
     }
     std::vector<FeatureLineResult> results;
     for (auto& f : futures) {
-      if (f.wait_until(deadline) != std::future_status::ready) {
-        metrics.record_rejected("deadline");
-        throw HttpError(503, "deadline_exceeded", "the request took longer than the server's deadline", {{"Retry-After", "5"}});
-      }
+      if (f.wait_until(deadline) != std::future_status::ready) throw_past_deadline();
       auto [result, waited] = f.get();
       if (timing != nullptr) {
         timing->queue_ms = std::max(timing->queue_ms, waited);
