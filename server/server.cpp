@@ -909,7 +909,8 @@ struct FeaturelineServer::Impl {
       body.text.append(data, size);
       return true;
     });
-    if (too_large) throw HttpError(413, "payload_too_large", "the request body exceeds 4 MiB");
+    if (too_large)
+      throw HttpError(413, "payload_too_large", "the request body exceeds " + std::to_string(kMaxJsonBytes >> 20) + " MiB");
     if (full) throw json_memory_full();
     if (!complete) throw HttpError(400, "invalid_request", "the request body ended early");
     return true;
