@@ -5,6 +5,7 @@
 
 #include "api/feature_line_json.h"
 #include "api/options_table.h"
+#include "api/segmentation_json.h"
 #include "engine/errors.h"
 
 namespace featureline {
@@ -82,6 +83,32 @@ SegmentationOptions parse_segmentation_options(const json& body, const std::vect
   SegmentationOptions parsed;
   apply_options(segmentation_option_table(), options, "", parsed);
   return parsed;
+}
+
+SegmentationRequest parse_segmentation_request(const json& body, const PreparedMesh& mesh) {
+  SegmentationRequest request;
+  request.options = parse_segmentation_options(body);
+  if (!body.contains("lines")) throw InvalidInputError("\"lines\" is required");
+  const json& list = body["lines"];
+  if (!list.is_array() || list.empty() || list.size() > RequestLimits::max_lines)
+    throw InvalidInputError("\"lines\" must be an array of 1 to " + std::to_string(RequestLimits::max_lines) +
+                            " line requests or computed lines");
+  request.lines.resize(list.size());
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string where = "lines[" + std::to_string(i) + "]";
+    if (is_computed_line(list[i])) {
+      request.lines[i] = parse_computed_line(list[i], mesh, where);
+    } else {
+      request.requests.push_back(parse_line_request(list[i], mesh, where));
+      request.requested_at.push_back(i);
+    }
+  }
+  return request;
+}
+
+std::vector<FeatureLineResult> SegmentationRequest::lines_with(std::vector<FeatureLineResult> detected) && {
+  for (std::size_t j = 0; j < detected.size() && j < requested_at.size(); ++j) lines[requested_at[j]] = std::move(detected[j]);
+  return std::move(lines);
 }
 
 FeatureSeedOptions parse_feature_seed_query(const std::vector<std::pair<std::string, std::string>>& parameters) {

@@ -31,6 +31,22 @@ std::vector<FeatureLineRequest> parse_feature_line_body(const nlohmann::json& bo
 SegmentationOptions parse_segmentation_options(const nlohmann::json& body,
                                                const std::vector<std::string>& line_fields = {"lines"});
 
+/// A segmentation request body, parsed: its options, and its "lines" (1 to
+/// RequestLimits::max_lines items) in order, each a line computed before (an answer's
+/// "refined", kept as it is: parse_computed_line) or a line request to detect.
+struct SegmentationRequest {
+  SegmentationOptions options;
+  std::vector<FeatureLineResult> lines;      ///< one per item; the requested ones empty until filled
+  std::vector<FeatureLineRequest> requests;  ///< the items to detect, in order
+  std::vector<std::size_t> requested_at;     ///< each request's place in `lines`
+
+  /// The lines with `detected` (one result per request, in order) in their places.
+  std::vector<FeatureLineResult> lines_with(std::vector<FeatureLineResult> detected) &&;
+};
+
+/// POST /v1/meshes/{id}/segmentation's body. 	hrow InvalidInputError naming the field
+SegmentationRequest parse_segmentation_request(const nlohmann::json& body, const PreparedMesh& mesh);
+
 /// The options of GET /v1/meshes/{id}/features from its query parameters (each named as a row of
 /// feature_seed_option_table(), its value a number). \throw InvalidInputError naming the parameter
 FeatureSeedOptions parse_feature_seed_query(const std::vector<std::pair<std::string, std::string>>& parameters);

@@ -93,30 +93,6 @@ FeatureLineResult parse_computed_line(const json& item, const PreparedMesh& mesh
   return line;
 }
 
-std::vector<FeatureLineResult> resolve_segmentation_lines(
-    const json& list, const PreparedMesh& mesh,
-    const std::function<FeatureLineRequest(const json&, const std::string&)>& parse_request,
-    const std::function<std::vector<FeatureLineResult>(const std::vector<FeatureLineRequest>&)>& detect) {
-  if (!list.is_array() || list.empty() || list.size() > 64)
-    throw InvalidInputError("\"lines\" must be an array of 1 to 64 line requests or computed lines");
-  std::vector<FeatureLineResult> lines(list.size());
-  std::vector<FeatureLineRequest> requests;
-  std::vector<std::size_t> requested_at;
-  for (std::size_t i = 0; i < list.size(); ++i) {
-    const std::string where = "lines[" + std::to_string(i) + "]";
-    if (is_computed_line(list[i])) {
-      lines[i] = parse_computed_line(list[i], mesh, where);
-    } else {
-      requests.push_back(parse_request(list[i], where));
-      requested_at.push_back(i);
-    }
-  }
-  if (requests.empty()) return lines;
-  auto detected = detect(requests);
-  for (std::size_t j = 0; j < detected.size(); ++j) lines[requested_at[j]] = std::move(detected[j]);
-  return lines;
-}
-
 std::string segmentation_to_glb(const PreparedMesh& mesh, const SegmentationResult& r) {
   const SegmentedSurface surface = segmented_surface(mesh, r);
   return labelled_mesh_to_glb(surface.positions, surface.triangles, r.labels, int(r.segments.size()));

@@ -35,15 +35,6 @@ bool is_computed_line(const nlohmann::json& item);
 ///        (e.g. "lines[2].refined, point 3: face 99999 is out of range (the mesh has 3200 faces)").
 FeatureLineResult parse_computed_line(const nlohmann::json& item, const PreparedMesh& mesh, const std::string& where);
 
-/// The "lines" of a segmentation request (1 to 64 items) as feature lines, in item order: lines
-/// computed before are parsed here; line requests are parsed by `parse_request(item, where)`
-/// and detected together by one call of `detect` (skipped when every line is computed).
-/// \throw InvalidInputError for a list that is not an array of 1 to 64 items.
-std::vector<FeatureLineResult> resolve_segmentation_lines(
-    const nlohmann::json& lines, const PreparedMesh& mesh,
-    const std::function<FeatureLineRequest(const nlohmann::json&, const std::string&)>& parse_request,
-    const std::function<std::vector<FeatureLineResult>(const std::vector<FeatureLineRequest>&)>& detect);
-
 /// A GLB with one primitive per segment (the remeshed surface in remesh mode).
 std::string segmentation_to_glb(const PreparedMesh& mesh, const SegmentationResult& result);
 

@@ -347,16 +347,11 @@ Answer detect(const featureline::PreparedMesh& mesh, const LineFlags& f) {
 }
 
 Answer segment(const featureline::PreparedMesh& mesh, const LineFlags& f) {
-  const json body = segmentation_body(f);
-  const auto options = featureline::parse_segmentation_options(body);
-  if (!body.contains("lines")) throw InvalidInputError("\"lines\" is required");
-  const auto lines = featureline::resolve_segmentation_lines(
-      body["lines"], mesh, [&](const json& item, const std::string& where) { return featureline::parse_line_request(item, mesh, where); },
-      [&](const std::vector<featureline::FeatureLineRequest>& requests) {
-        std::vector<featureline::FeatureLineResult> results;
-        for (const auto& request : requests) results.push_back(featureline::detect_feature_line(mesh, request));
-        return results;
-      });
+  auto request = featureline::parse_segmentation_request(segmentation_body(f), mesh);
+  const auto options = request.options;
+  std::vector<featureline::FeatureLineResult> detected;
+  for (const auto& line : request.requests) detected.push_back(featureline::detect_feature_line(mesh, line));
+  const auto lines = std::move(request).lines_with(std::move(detected));
   const auto parts = featureline::segment_mesh(mesh, lines, options);
   return {featureline::segmentation_to_json(parts, options.mode), featureline::ExportContent::segmentation,
           [&mesh, parts](featureline::ExportFormat format) {

@@ -949,14 +949,12 @@ struct FeaturelineServer::Impl {
   void segmentation(const httplib::Request& req, JsonBody& request_body, httplib::Response& res) {
     auto session = session_or_404(req.matches[1]);
     const ExportFormat format = answer_format(req, ExportContent::segmentation);
-    const json body = json_body(req, request_body);
-    const SegmentationOptions segmentation_options = parse_segmentation_options(body);
-    if (!body.contains("lines")) throw InvalidInputError("\"lines\" is required");
+    SegmentationRequest request = parse_segmentation_request(json_body(req, request_body), *session->mesh);
+    const SegmentationOptions segmentation_options = request.options;
     // Items are line requests (detected here) or lines the client already has (computed once).
-    const auto results = resolve_segmentation_lines(
-        body["lines"], *session->mesh,
-        [&](const json& item, const std::string& where) { return parse_line_request(item, *session->mesh, where); },
-        [&](const std::vector<FeatureLineRequest>& requests) { return run_lines(session, requests); });
+    std::vector<FeatureLineResult> detected;
+    if (!request.requests.empty()) detected = run_lines(session, request.requests);
+    const auto results = std::move(request).lines_with(std::move(detected));
     const SegmentationResult segments = run_on_pool([session, results, segmentation_options](const Cancellation* cancel) {
       return segment_mesh(*session->mesh, results, segmentation_options, cancel);
     });

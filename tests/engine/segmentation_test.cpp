@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "api/feature_line_json.h"
+#include "api/requests.h"
 #include "api/segmentation_json.h"
 #include "engine/errors.h"
 #include "engine/feature_line.h"
@@ -536,43 +537,27 @@ TEST(Segmentation, ComputedLinesGiveTheSameSegmentationAsRequests) {
   }
 }
 
-TEST(Segmentation, ResolvedLinesDetectOnlyTheRequestsInOneBatch) {
+TEST(Segmentation, ARequestsComputedLinesAreKeptAndOnlyItsRequestsDetected) {
   const Capsule capsule;
   const auto& mesh = *capsule.mesh;
   const auto loop = line_through(mesh, capsule.ring_keys(1), true);
-  const nlohmann::json lines = {computed_item(loop), {{"keys", capsule.ring_keys(3)}, {"closed", true}},
-                                computed_item(loop)};
-  std::vector<std::string> parsed_at;
-  int batches = 0;
-  const auto resolved = resolve_segmentation_lines(
-      lines, mesh,
-      [&](const nlohmann::json& item, const std::string& where) {
-        parsed_at.push_back(where);
-        FeatureLineRequest request;
-        request.keys = item["keys"].get<std::vector<std::uint32_t>>();
-        request.closed = item["closed"].get<bool>();
-        return request;
-      },
-      [&](const std::vector<FeatureLineRequest>& requests) {
-        ++batches;
-        std::vector<FeatureLineResult> out;
-        for (const auto& r : requests) out.push_back(detect_feature_line(mesh, r));
-        return out;
-      });
-  EXPECT_EQ(batches, 1);
-  EXPECT_EQ(parsed_at, std::vector<std::string>{"lines[1]"});
+  const nlohmann::json body = {{"lines", {computed_item(loop), {{"keys", capsule.ring_keys(3)}, {"closed", true}}, computed_item(loop)}},
+                               {"mode", "snap"}};
+  SegmentationRequest request = parse_segmentation_request(body, mesh);
+  EXPECT_EQ(request.options.mode, SegmentationMode::snap);
+  ASSERT_EQ(request.requests.size(), 1u);
+  EXPECT_EQ(request.requested_at, std::vector<std::size_t>{1});
+  EXPECT_EQ(request.requests[0].keys, capsule.ring_keys(3));
+  EXPECT_TRUE(request.requests[0].closed);
+  std::vector<FeatureLineResult> detected;
+  for (const auto& r : request.requests) detected.push_back(detect_feature_line(mesh, r));
+  const auto resolved = std::move(request).lines_with(std::move(detected));
   ASSERT_EQ(resolved.size(), 3u);
   EXPECT_EQ(resolved[1].keys, capsule.ring_keys(3));  // the detected one, in its place
   EXPECT_EQ(resolved[0].refined.size(), loop.refined.size());
   EXPECT_EQ(segment_mesh(mesh, resolved).segments.size(), 3u);  // the duplicate loop cuts nothing new
-  // Every line computed: no detection at all.
-  batches = 0;
-  resolve_segmentation_lines(nlohmann::json::array({computed_item(loop)}), mesh, nullptr,
-                             [&](const std::vector<FeatureLineRequest>&) {
-                               ++batches;
-                               return std::vector<FeatureLineResult>{};
-                             });
-  EXPECT_EQ(batches, 0);
+  // Every line computed: nothing to detect.
+  EXPECT_TRUE(parse_segmentation_request({{"lines", {computed_item(loop)}}}, mesh).requests.empty());
 }
 
 // The InvalidInputError message of parsing `item` as lines[0].
@@ -630,7 +615,8 @@ TEST(Segmentation, ComputedLineErrorsNameTheField) {
   const auto& t = mesh.triangles[2];
   EXPECT_EQ(line.refined[1].position,
             Eigen::Vector3d(0.2 * mesh.positions[t[0]] + 0.3 * mesh.positions[t[1]] + 0.5 * mesh.positions[t[2]]));
-  EXPECT_THROW(resolve_segmentation_lines(nlohmann::json::array(), mesh, nullptr, nullptr), InvalidInputError);
+  EXPECT_THROW(parse_segmentation_request({{"lines", nlohmann::json::array()}}, mesh), InvalidInputError);
+  EXPECT_THROW(parse_segmentation_request({{"mode", "snap"}}, mesh), InvalidInputError);  // "lines" is required
 }
 
 }  // namespace
