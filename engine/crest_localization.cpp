@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 
+#include "engine/internal/stopwatch.h"
 #include "engine/errors.h"
 #include "engine/internal/strip_walk.h"
 
@@ -193,8 +194,7 @@ double line_fit_radius(const FlatStrip& flat, const std::vector<double>& field, 
     if (std::isfinite(fit.half_width)) widths.push_back(fit.half_width);
   }
   if (widths.empty()) return smallest;
-  std::nth_element(widths.begin(), widths.begin() + std::ptrdiff_t(widths.size() / 2), widths.end());
-  return std::clamp(widths[widths.size() / 2], smallest, std::max(smallest, largest));
+  return std::clamp(median_of(std::move(widths)), smallest, std::max(smallest, largest));
 }
 
 // (1, 2, 1)/4 passes over the offsets, each weighted by whether its fit found a crest; the

@@ -16,13 +16,6 @@
 namespace featureline {
 namespace {
 
-double median_of(std::vector<double> values) {
-  if (values.empty()) return 0;
-  const auto mid = values.begin() + std::ptrdiff_t(values.size() / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  return *mid;
-}
-
 // Vertices and faces per block of a parallel loop: a few hundred microseconds of fits, so the
 // next-block handout stays cheap while uneven work (denser neighbourhoods, creases) still
 // spreads over the participants (equal halves of igea's fits took 198 and 226 ms).
@@ -361,9 +354,8 @@ double relative_roughness(const SmoothedField& s) {
     }
   }
   if (magnitude.empty()) return 0;
-  const auto p90 = magnitude.begin() + std::ptrdiff_t(magnitude.size() * 9 / 10);
-  std::nth_element(magnitude.begin(), p90, magnitude.end());
-  return *p90 > 0 ? median_of(difference) / *p90 : 0;
+  const double p90 = value_of_rank(magnitude, magnitude.size() * 9 / 10);
+  return p90 > 0 ? median_of(difference) / p90 : 0;
 }
 
 // Smooths in doubling runs (1, 2, 4, ... passes in all, at most max_passes) for as long as a

@@ -8,6 +8,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "engine/internal/stopwatch.h"
 #include "engine/crease_fit.h"
 #include "engine/errors.h"
 #include "engine/internal/edge_search.h"
@@ -16,7 +17,6 @@ namespace featureline {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
 
 struct Piece {
   std::size_t begin, end;  // indices into the (unrolled) line, both ends pinned

@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
 
+#include "engine/internal/stopwatch.h"
 #include "engine/errors.h"
 #include "engine/internal/vertex_map.h"
 
@@ -129,13 +130,6 @@ class Neighbourhood {
   StampedMap seen_;
   std::vector<std::uint32_t> found_;
 };
-
-double median_of(std::vector<double> values) {
-  if (values.empty()) return 0;
-  const auto mid = values.begin() + std::ptrdiff_t(values.size() / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  return *mid;
-}
 
 // Tukey's biweight of residual r at robust scale sigma.
 double tukey(double r, double sigma) {
@@ -697,7 +691,7 @@ FittedCurveResult fit_feature_curve(const PreparedMesh& pm, const FittedCurveLin
   result.fallback_share = double(counts[int(Source::line)]) / n;
   result.length = polyline_length_of(result.points, result.closed);
   result.control_spacing = spacing;
-  result.elapsed_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  result.elapsed_ms = ms_since(start);
   return result;
 }
 

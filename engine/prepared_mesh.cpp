@@ -83,9 +83,7 @@ void count_non_manifold(const RawMesh& raw, MeshStatistics& stats) {
 
 double percentile(std::vector<double> values, double q) {
   if (values.empty()) return 0;
-  const std::size_t k = std::min(values.size() - 1, std::size_t(q * double(values.size() - 1) + 0.5));
-  std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(k), values.end());
-  return values[k];
+  return value_of_rank(values, std::min(values.size() - 1, std::size_t(q * double(values.size() - 1) + 0.5)));
 }
 
 // True when a triangle over the same three vertices as `corners` (in either orientation) is
@@ -484,7 +482,7 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   stats.crease_edges = pm.curvature.crease_edges;
   measure_curvature(pm);
 
-  pm.prepare_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  pm.prepare_ms = ms_since(start);
   return prepared;
 }
 

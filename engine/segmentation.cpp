@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 
+#include "engine/internal/stopwatch.h"
 #include "engine/errors.h"
 #include "engine/segmentation/stages.h"
 
@@ -67,7 +68,7 @@ SegmentationResult segment_mesh(const PreparedMesh& mesh, const std::vector<Feat
   throw_if_cancelled(cancel);  // cutting is done; labelling floods every face
   const LabelReport labelling = label_segments(cut, lines.size(), options, report, result);
   add_segmentation_warnings(lines, options, report, labelling, result);
-  result.elapsed_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  result.elapsed_ms = ms_since(start);
   return result;
 }
 

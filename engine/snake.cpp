@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/internal/stopwatch.h"
 #include "engine/errors.h"
 #include "engine/internal/geometry.h"
 #include "engine/internal/snake_force.h"
@@ -406,9 +407,7 @@ double strip_feature_strength(const PreparedMesh& pm, const FeatureStrip& strip,
   for (auto v : strip.vertices)
     strength.push_back(std::min(feature_value(pm.curvature, v, o.feature_sign) / pm.curvature_scale, o.curvature_cap));
   if (strength.empty()) return 0;
-  const auto at = strength.begin() + std::ptrdiff_t(0.9 * double(strength.size() - 1));
-  std::nth_element(strength.begin(), at, strength.end());
-  return *at;
+  return value_of_rank(strength, std::size_t(0.9 * double(strength.size() - 1)));
 }
 
 void check_snake_options(const SnakeOptions& o) {
