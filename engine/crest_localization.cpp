@@ -5,8 +5,8 @@
 
 #include <Eigen/Dense>
 
-#include "engine/internal/stopwatch.h"
 #include "engine/errors.h"
+#include "engine/internal/order_statistics.h"
 #include "engine/internal/strip_walk.h"
 
 namespace featureline {

@@ -11,6 +11,7 @@
 #include "engine/errors.h"
 #include "engine/executor.h"
 #include "engine/internal/geometry.h"
+#include "engine/internal/order_statistics.h"
 #include "engine/internal/stopwatch.h"
 
 namespace featureline {

@@ -8,10 +8,10 @@
 #include <string>
 #include <unordered_map>
 
-#include "engine/internal/stopwatch.h"
 #include "engine/crease_fit.h"
 #include "engine/errors.h"
 #include "engine/internal/edge_search.h"
+#include "engine/internal/stopwatch.h"
 
 namespace featureline {
 namespace {
@@ -81,12 +81,11 @@ std::deque<Piece> pinned_pieces(const UnrolledLine& line, bool pin_interior_keys
 void mark_crease_pieces(const PreparedMesh& pm, const FeatureLineOptions& options, const std::vector<std::uint32_t>& line,
                         double feature_sign, bool noisy_mesh, std::deque<Piece>& pieces) {
   if (options.exact_crease_edges <= 0) return;
-  const bool clean = !noisy_mesh;
   for (Piece& piece : pieces) {
     const bool long_enough = piece.end - piece.begin >= std::size_t(options.exact_crease_edges);
     const double share = long_enough ? crease_share(pm, line, piece, feature_sign) : 0.0;
-    piece.exact = clean && share == 1.0;
-    piece.noisy_crease = !clean && share >= options.crease_fit.min_crease_share && options.crease_fit.bandwidth > 0;
+    piece.exact = !noisy_mesh && share == 1.0;
+    piece.noisy_crease = noisy_mesh && share >= options.crease_fit.min_crease_share && options.crease_fit.bandwidth > 0;
   }
 }
 

@@ -9,8 +9,9 @@
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
 
-#include "engine/internal/stopwatch.h"
 #include "engine/errors.h"
+#include "engine/internal/order_statistics.h"
+#include "engine/internal/stopwatch.h"
 #include "engine/internal/vertex_map.h"
 
 namespace featureline {

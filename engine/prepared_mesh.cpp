@@ -1,22 +1,21 @@
 #include "engine/prepared_mesh.h"
 
-#include "engine/tri_mesh.h"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <numeric>
 #include <sstream>
 #include <unordered_map>
 
 #include <OpenMesh/Core/System/omstream.hh>
 
-#include <mutex>
-
 #include "engine/errors.h"
 #include "engine/executor.h"
 #include "engine/internal/geometry.h"
+#include "engine/internal/order_statistics.h"
 #include "engine/internal/stopwatch.h"
+#include "engine/tri_mesh.h"
 
 namespace featureline {
 namespace {

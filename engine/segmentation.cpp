@@ -6,8 +6,8 @@
 #include <cmath>
 #include <string>
 
-#include "engine/internal/stopwatch.h"
 #include "engine/errors.h"
+#include "engine/internal/stopwatch.h"
 #include "engine/segmentation/stages.h"
 
 namespace featureline {

@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "engine/internal/stopwatch.h"
 #include "engine/errors.h"
 #include "engine/internal/geometry.h"
+#include "engine/internal/order_statistics.h"
 #include "engine/internal/snake_force.h"
 #include "engine/internal/strip_walk.h"
 
