@@ -44,7 +44,7 @@ struct SegmentationRequest {
   std::vector<FeatureLineResult> lines_with(std::vector<FeatureLineResult> detected) &&;
 };
 
-/// POST /v1/meshes/{id}/segmentation's body. 	hrow InvalidInputError naming the field
+/// POST /v1/meshes/{id}/segmentation's body. \throw InvalidInputError naming the field
 SegmentationRequest parse_segmentation_request(const nlohmann::json& body, const PreparedMesh& mesh);
 
 /// The options of GET /v1/meshes/{id}/features from its query parameters (each named as a row of

@@ -155,7 +155,7 @@ class DurableSessions {
 
   /// A new upload's session: stored first, then cached under a fresh id. std::nullopt when the
   /// prepared mesh exceeds the cache's whole budget (nothing is stored then).
-  /// 	hrow StoreFullError, StoreUnavailableError (nothing is kept then)
+  /// \throw StoreFullError, StoreUnavailableError (nothing is kept then)
   std::optional<std::shared_ptr<const MeshSession>> create(MeshSession session, const StoredUpload& upload);
 
   /// A new upload stored under a fresh id without preparing it here: the replica that id belongs
