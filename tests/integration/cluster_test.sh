@@ -43,13 +43,7 @@ trap cluster_cleanup EXIT
 trap 'exit 130' INT TERM
 
 # A port P with P..P+5 free (nginx, Redis, up to 4 replicas); bounded tries.
-for _ in $(seq 1 50); do
-  p=$((20000 + RANDOM % 40000))
-  busy=0
-  for q in $(seq "$p" $((p + 5))); do ss -Htln "sport = :$q" | grep -q . && busy=1; done
-  [ $busy = 0 ] && { CLUSTER_PORT=$p; break; }
-done
-[ -n "$CLUSTER_PORT" ] || { echo "FAIL no block of 6 free loopback ports found"; exit 1; }
+CLUSTER_PORT=$(free_port_block 6) || { echo "FAIL no block of 6 free loopback ports found"; exit 1; }
 FRONT="http://127.0.0.1:$CLUSTER_PORT"
 echo "# cluster on port $CLUSTER_PORT (time factor $FACTOR), state $STATE"
 

@@ -403,8 +403,7 @@ PY
   for file in $C $K; do
     name=${file#docker/}; out="$TMP/redis-$name"
     DEPLOY_DATA="$TMP/data-$name"; mkdir -p "$DEPLOY_DATA"
-    DEPLOY_PORT=""
-    for _ in $(seq 1 50); do p=$((20000 + RANDOM % 40000)); ss -Htln "sport = :$p" | grep -q . || { DEPLOY_PORT=$p; break; }; done
+    DEPLOY_PORT=$(free_port_block 1) || { fail "$name: a free port for Redis"; continue; }
     container_redis "$file" "$out" || { fail "$name: Redis' command and probe read"; continue; }
     mapfile -d '' start <"$out.start"; mapfile -d '' probe <"$out.probe"
     pw="t$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')"

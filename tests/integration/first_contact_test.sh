@@ -17,7 +17,6 @@ stop_run() {  # run.sh and its server: one process group (setsid), stopped by it
   RUN_PID=""
 }
 trap 'stop_run; cleanup' EXIT
-free_port() { python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
 
 # start_run OUT: scripts/run.sh on $RUN_PORT with its data in $TMP/data; waits (bounded) until it serves.
 start_run() {
@@ -50,7 +49,7 @@ run_printed_curls() {
   check "run.sh printed three curl lines" [ "$n" = 3 ]
 }
 
-RUN_PORT=$(free_port)
+RUN_PORT=$(free_port_block 1) || { fail "a free port for run.sh"; exit 1; }
 if start_run "$TMP/run1.out"; then
   pass "scripts/run.sh starts serving"
   check "run.sh ran the CLI on the sample first" grep -q '"refined":{"points":' "$TMP/run1.out"

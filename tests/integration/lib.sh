@@ -8,6 +8,8 @@
 #
 #   check NAME COMMAND...      runs COMMAND; prints "ok   NAME" or "FAIL NAME"
 #   pass NAME / fail NAME [DETAIL...]
+#   free_port_block COUNT      prints a port P with P..P+COUNT-1 unused, for programs that cannot
+#                              listen on port 0 and report it (Redis, nginx)
 #   start_server NAME [FLAGS...]  starts $SERVER on a free port (--port 0 --port-file), waits
 #                              until /healthz answers; sets SRV_BASE[NAME], SRV_PID[NAME],
 #                              SRV_LOG[NAME] (stderr: access log, "stopped", sanitizer reports)
@@ -69,6 +71,25 @@ now_s() { date +%s.%N; }
 elapsed_since() { awk -v a="$1" -v b="$(now_s)" 'BEGIN { printf "%.2f", b - a }'; }
 # less_than A B: A < B for decimals
 less_than() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a < b) }'; }
+
+# ---- ports ----------------------------------------------------------------------------------
+
+# Ports are drawn below the kernel's ephemeral range: an outgoing connection of a test running in
+# parallel can take any free port inside it between our check and the bind (Redis once failed with
+# "Address already in use" that way). Every socket state counts, not only listeners.
+free_port_block() {
+  local count=$1 low high p q busy
+  read -r low high </proc/sys/net/ipv4/ip_local_port_range 2>/dev/null || { low=32768; high=60999; }
+  local from=10000 to=$((low - count))
+  if [ "$to" -le $((from + 1000)) ]; then from=$((high + 1)); to=$((65535 - count)); fi
+  for _ in $(seq 1 100); do
+    p=$((from + (RANDOM * 32768 + RANDOM) % (to - from)))
+    busy=0
+    for q in $(seq "$p" $((p + count - 1))); do ss -Htan "( sport = :$q )" | grep -q . && { busy=1; break; }; done
+    [ $busy = 0 ] && { echo "$p"; return 0; }
+  done
+  return 1
+}
 
 # ---- servers --------------------------------------------------------------------------------
 

@@ -35,9 +35,7 @@ USER_PASSWORD="u$(random_hex)"
 WRONG="wrong$(random_hex)"
 OTHER="other$(random_hex)"
 
-REDIS_PORT=""
-for _ in $(seq 1 50); do p=$((20000 + RANDOM % 40000)); ss -Htln "sport = :$p" | grep -q . || { REDIS_PORT=$p; break; }; done
-[ -n "$REDIS_PORT" ] || { echo "FAIL no free port for Redis"; exit 1; }
+REDIS_PORT=$(free_port_block 1) || { echo "FAIL no free port for Redis"; exit 1; }
 STORE="redis://127.0.0.1:$REDIS_PORT"
 
 REDIS_PID=""

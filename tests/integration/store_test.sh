@@ -117,8 +117,7 @@ check_eq "nothing of it is kept (one upload on disk)" "$(ls "$T/data3/uploads" |
 check_eq "no session of it is cached" "$(metric full featureline_cache_entries)" 1
 stop_server full
 
-free_port=""
-for _ in $(seq 1 50); do p=$((20000 + RANDOM % 40000)); ss -Htln "sport = :$p" | grep -q . || { free_port=$p; break; }; done
+free_port=$(free_port_block 1) || { fail "a free port for the unreachable store"; exit 1; }
 start_server noredis --store "redis://127.0.0.1:$free_port" --quiet || exit 1
 upload noredis samples/ridge_field.off
 expect "an upload while Redis is unreachable" 503 storage_unavailable POST /v1/meshes "$T/up.json"
@@ -153,8 +152,7 @@ trap store_cleanup EXIT
 readyz() {  # readyz SERVER_NAME OUT: sets STATUS
   http "$2" "${SRV_BASE[$1]}/readyz"
 }
-REDIS_PORT=""
-for _ in $(seq 1 50); do p=$((20000 + RANDOM % 40000)); ss -Htln "sport = :$p" | grep -q . || { REDIS_PORT=$p; break; }; done
+REDIS_PORT=$(free_port_block 1) || { fail "a free port for Redis"; exit 1; }
 
 start_server memonly --quiet || exit 1
 readyz memonly "$T/rz_mem.json"
