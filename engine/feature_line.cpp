@@ -79,13 +79,13 @@ std::deque<Piece> pinned_pieces(const UnrolledLine& line, bool pin_interior_keys
 // Clean creases are the feature itself: their runs are kept exactly. On a noisy mesh a crease
 // run is re-fitted instead of handed to the snake (see engine/crease_fit.h for why).
 void mark_crease_pieces(const PreparedMesh& pm, const FeatureLineOptions& options, const std::vector<std::uint32_t>& line,
-                        double feature_sign, bool noisy_mesh, std::deque<Piece>& pieces) {
+                        const LineContext& context, std::deque<Piece>& pieces) {
   if (options.exact_crease_edges <= 0) return;
   for (Piece& piece : pieces) {
     const bool long_enough = piece.end - piece.begin >= std::size_t(options.exact_crease_edges);
-    const double share = long_enough ? crease_share(pm, line, piece, feature_sign) : 0.0;
-    piece.exact = !noisy_mesh && share == 1.0;
-    piece.noisy_crease = noisy_mesh && share >= options.crease_fit.min_crease_share && options.crease_fit.bandwidth > 0;
+    const double share = long_enough ? crease_share(pm, line, piece, context.feature_sign) : 0.0;
+    piece.exact = !context.noisy_mesh && share == 1.0;
+    piece.noisy_crease = context.noisy_mesh && share >= options.crease_fit.min_crease_share && options.crease_fit.bandwidth > 0;
   }
 }
 
@@ -93,10 +93,7 @@ void mark_crease_pieces(const PreparedMesh& pm, const FeatureLineOptions& option
 struct LineRun {
   const PreparedMesh& pm;
   const FeatureLineOptions& options;
-  const SnakeOptions& snake;  ///< the request's, with the line's feature sign
-  /// The mesh's estimated noise is at or above options.exact_crease_noise: crease runs are
-  /// re-fitted rather than kept, and the automatic layout tolerates fewer dropped triangles.
-  bool noisy_mesh;
+  const LineContext& context;
   const Cancellation* cancel;
   const std::vector<std::uint32_t>& line;  ///< unrolled
 };
@@ -160,7 +157,7 @@ PieceWork start_piece(const LineRun& run, const Piece& piece) {
   work.report.edges = work.sub.size() - 1;
   work.initial_points = vertex_points(run.pm, work.sub);
   work.report.initial_strength =
-      mean_feature_strength(run.pm, work.initial_points, run.snake.feature_sign, run.snake.curvature_cap);
+      mean_feature_strength(run.pm, work.initial_points, run.context.feature_sign, run.options.snake.curvature_cap);
   return work;
 }
 
@@ -211,10 +208,10 @@ void localize_on_crest(const LineRun& run, const FeatureStrip& strip, const Flat
       if (!ends[e].placed) ends[e].movable = false;
     }
   }
-  const CrestResult crest = localize_crest(run.pm, strip, flat, snake.points, run.snake.feature_sign, run.options.crest, ends);
+  const CrestResult crest = localize_crest(run.pm, strip, flat, snake.points, run.context.feature_sign, run.options.crest, ends);
   if (crest.moved == 0) return;
   std::vector<SurfacePoint> points = map_to_surface(run.pm, strip, crest.points);
-  const double strength = mean_feature_strength(run.pm, points, run.snake.feature_sign, run.snake.curvature_cap);
+  const double strength = mean_feature_strength(run.pm, points, run.context.feature_sign, run.options.snake.curvature_cap);
   if (strength < work.report.refined_strength * (1 - 1e-3)) return;
   work.points = std::move(points);
   work.report.refined_strength = strength;
@@ -238,15 +235,15 @@ bool snake_on_strip(const LineRun& run, const FeatureStrip& strip, const FlatStr
                     FeatureLineResult& result) {
   bool border = false;
   try {
-    const SnakeResult snake = refine_with_snake(run.pm, strip, flat, run.snake, run.cancel);
+    const SnakeResult snake = refine_with_snake(run.pm, strip, flat, run.options.snake, run.context, run.cancel);
     border = reaches_border(strip, snake.points);
     work.points = map_to_surface(run.pm, strip, snake.points);
     result.iterations += snake.iterations;
     work.report.iterations = snake.iterations;
     work.report.featureless = snake.featureless;
     work.report.iteration_cap =
-        !snake.converged && !snake.featureless && snake.iterations >= run.snake.max_iterations;
-    work.report.refined_strength = mean_feature_strength(run.pm, work.points, run.snake.feature_sign, run.snake.curvature_cap);
+        !snake.converged && !snake.featureless && snake.iterations >= run.options.snake.max_iterations;
+    work.report.refined_strength = mean_feature_strength(run.pm, work.points, run.context.feature_sign, run.options.snake.curvature_cap);
     localize_on_crest(run, strip, flat, snake, work);
     if (work.report.refined_strength < run.options.keep_initial_below * work.report.initial_strength) {
       // Never worse: the snake left the feature (cut a corner, was drawn to another
@@ -308,7 +305,7 @@ void refine_again_nearer(const LineRun& run, PieceWork& work, FeatureLineResult&
   PieceWork second = work;
   second.sub = path;
   const FeatureStrip strip = extract_feature_strip(run.pm, path, run.options.strip);
-  const FlatStrip flat = flatten_strip(run.pm, strip, run.options.strip, run.noisy_mesh);
+  const FlatStrip flat = flatten_strip(run.pm, strip, run.options.strip, run.context);
   if (flat.flipped_near_line > 0) return;
   FeatureLineResult tally;  // the second pass's iterations and warnings count only when it is kept
   snake_on_strip(run, strip, flat, second, tally);
@@ -329,9 +326,9 @@ bool refine_piece_with_snake(const LineRun& run, PieceWork& work, std::deque<Pie
   // the conformal solve, which cost such lines (keys off any feature) most of their flattening.
   StripOptions layout = run.options.strip;
   if (layout.flattening == StripFlattening::automatic &&
-      strip_feature_strength(run.pm, strip, run.snake) < run.snake.featureless_below)
+      strip_feature_strength(run.pm, strip, run.options.snake, run.context) < run.options.snake.featureless_below)
     layout.flattening = StripFlattening::similar_triangles;
-  const FlatStrip flat = flatten_strip(run.pm, strip, layout, run.noisy_mesh);
+  const FlatStrip flat = flatten_strip(run.pm, strip, layout, run.context);
   result.timings.flatten_ms += ms_since(t0);
   if (split_where_folded(run, work.piece, flat, pieces)) {
     ++result.splits;
@@ -357,7 +354,7 @@ bool refine_piece(const LineRun& run, PieceWork& work, std::deque<Piece>& pieces
   } else if (work.piece.noisy_crease) {
     work.points = fit_noisy_crease(run.pm, work.sub, run.options.crease_fit).points;
     work.report.kept = PieceKept::crease_fit;
-    work.report.refined_strength = mean_feature_strength(run.pm, work.points, run.snake.feature_sign, run.snake.curvature_cap);
+    work.report.refined_strength = mean_feature_strength(run.pm, work.points, run.context.feature_sign, run.options.snake.curvature_cap);
   } else if (work.sub.size() < 3) {
     keep_initial(work, "a single edge");  // a single edge is already straight on the surface
   } else {
@@ -366,16 +363,19 @@ bool refine_piece(const LineRun& run, PieceWork& work, std::deque<Piece>& pieces
   return true;
 }
 
-// The line's snake options: when the request leaves the sign open, the traced feature's sign,
-// or that of the keys' feature.
-SnakeOptions line_snake_options(const PreparedMesh& pm, const FeatureLineRequest& request, const FeatureLineResult& result) {
-  SnakeOptions snake = request.options.snake;
-  if (snake.feature_sign != 0) return snake;
+// The line's feature sign (the request's, else the traced feature's, else that of the keys'
+// feature) and whether it treats the mesh as noisy.
+LineContext line_context(const PreparedMesh& pm, const FeatureLineRequest& request, const FeatureLineResult& result) {
+  const FeatureLineOptions& options = request.options;
+  LineContext context;
+  context.noisy_mesh = pm.curvature.noise >= options.exact_crease_noise;
+  context.feature_sign = options.snake.feature_sign;
+  if (context.feature_sign != 0) return context;
   if (result.trace)
-    snake.feature_sign = result.trace->sign == FeatureSign::ridge ? 1.0 : -1.0;
-  else if (request.options.initial.sign_aware)
-    snake.feature_sign = keys_feature_sign(pm, request.keys, request.options.initial);
-  return snake;
+    context.feature_sign = result.trace->sign == FeatureSign::ridge ? 1.0 : -1.0;
+  else if (options.initial.sign_aware)
+    context.feature_sign = keys_feature_sign(pm, request.keys, options.initial);
+  return context;
 }
 
 void check_min_piece_edges(const FeatureLineOptions& options) {
@@ -502,14 +502,13 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
     result.refined_length = polyline_length(result.refined, closed);
     report_key_points(pm, line, Pins(line.vertices.size(), closed), result);
     result.timings.total_ms = ms_since(start);
-    fit_curve_when_asked(pm, options, line_snake_options(pm, request, result).feature_sign, {}, result);
+    fit_curve_when_asked(pm, options, line_context(pm, request, result).feature_sign, {}, result);
     return result;
   }
 
   std::deque<Piece> pieces = pinned_pieces(line, options.pin_interior_keys, closed, result.warnings);
-  const SnakeOptions snake_options = line_snake_options(pm, request, result);
-  const bool noisy_mesh = pm.curvature.noise >= options.exact_crease_noise;
-  mark_crease_pieces(pm, options, line.vertices, snake_options.feature_sign, noisy_mesh, pieces);
+  const LineContext context = line_context(pm, request, result);
+  mark_crease_pieces(pm, options, line.vertices, context, pieces);
   std::vector<std::size_t> crease_pins;
   for (const Piece& piece : pieces)
     if (piece.exact || piece.noisy_crease) crease_pins.insert(crease_pins.end(), {piece.begin, piece.end});
@@ -517,7 +516,7 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
     for (const std::size_t index : std::vector<std::size_t>(crease_pins))
       if (index == 0 || index + 1 == line.vertices.size()) crease_pins.insert(crease_pins.end(), {0, line.vertices.size() - 1});
   Pins pins(line.vertices.size(), closed);
-  const LineRun run{pm, options, snake_options, noisy_mesh, request.cancel, line.vertices};
+  const LineRun run{pm, options, context, request.cancel, line.vertices};
   std::vector<SurfacePoint>& refined = result.refined;
   std::vector<char> exact;  // per refined point: on an exact crease run (the fitted curve keeps those)
   while (!pieces.empty()) {
@@ -539,7 +538,7 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   report_key_points(pm, line, pins, result);
   result.refined_length = polyline_length(refined, closed);
   result.timings.total_ms = ms_since(start);
-  fit_curve_when_asked(pm, options, snake_options.feature_sign, std::move(exact), result);
+  fit_curve_when_asked(pm, options, context.feature_sign, std::move(exact), result);
   return result;
 }
 

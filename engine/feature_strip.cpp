@@ -368,7 +368,7 @@ void mark_valid_triangles(const PreparedMesh& pm, const FeatureStrip& strip, con
 
 }  // namespace
 
-FlatStrip flatten_strip(const PreparedMesh& pm, const FeatureStrip& strip, const StripOptions& options, bool noisy_mesh) {
+FlatStrip flatten_strip(const PreparedMesh& pm, const FeatureStrip& strip, const StripOptions& options, const LineContext& line) {
   const std::size_t n = strip.vertices.size();
   const auto unplaced = [n] {
     FlatStrip flat;
@@ -393,7 +393,7 @@ FlatStrip flatten_strip(const PreparedMesh& pm, const FeatureStrip& strip, const
     // every strip); no other figure moves between 1%, 3% and 5%. On a scan as clean as the
     // bunny (0.021) a 3% threshold solved more lines for nothing: its median 3-key line went
     // from 1.8 to 2.2 ms (bench_pipeline, quiet machine).
-    const double max_dropped_share = noisy_mesh ? 0.03 : 0.05;
+    const double max_dropped_share = line.noisy_mesh ? StripOptions::max_dropped_share_noisy : StripOptions::max_dropped_share;
     const double dropped = double(paper->distorted_triangles + paper->flipped_triangles);
     if (options.flattening == StripFlattening::similar_triangles ||
         dropped <= max_dropped_share * double(strip.triangles.size()))

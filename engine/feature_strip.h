@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "engine/enum_names.h"
+#include "engine/line_context.h"
 #include "engine/prepared_mesh.h"
 #include "engine/valid_range.h"
 
@@ -27,9 +28,9 @@ enum class StripFlattening {
   /// triangle as close to similar to its 3D shape as all the others allow, so noise spreads
   /// out instead of compounding.
   conformal,
-  /// similar_triangles where it keeps at least 95% of the strip's triangles in the snake's domain
-  /// (97% on noisy meshes; clean meshes: it is exact on developable strips and cheaper),
-  /// conformal elsewhere.
+  /// similar_triangles where it drops at most StripOptions::max_dropped_share of the strip's
+  /// triangles from the snake's domain (max_dropped_share_noisy on noisy meshes; clean meshes:
+  /// it is exact on developable strips and cheaper), conformal elsewhere.
   automatic,
 };
 template <>
@@ -55,6 +56,10 @@ struct StripOptions {
   /// What the strip accepts (check_strip_options); api/options_table.cpp's limits lie inside.
   static constexpr int max_rings = 8;
   static constexpr ValidRange rings_range = closed_range(0, max_rings);
+  /// StripFlattening::automatic keeps the paper's layout while it drops at most this share of
+  /// the strip's triangles from the snake's domain (flatten_strip says why these values).
+  static constexpr double max_dropped_share = 0.05;
+  static constexpr double max_dropped_share_noisy = 0.03;
 };
 
 /// \throw InvalidInputError when an option is outside its range (StripOptions::*_range).
@@ -93,11 +98,10 @@ struct FlatStrip {
 
 /// Lays the strip out in the plane (StripOptions::flattening), then marks the triangles the
 /// snake may use: placed, not folded over, edges within max_edge_distortion of their 3D
-/// lengths. `noisy_mesh`: the line treats the mesh as noisy (detect_feature_line decides it once
-/// per line, from FeatureLineOptions::exact_crease_noise); the automatic layout then solves
-/// strips that the paper's layout leaves 3% of, instead of 5%.
+/// lengths. On a line whose context says the mesh is noisy the automatic layout solves strips
+/// the paper's layout drops max_dropped_share_noisy of, instead of max_dropped_share.
 FlatStrip flatten_strip(const PreparedMesh& mesh, const FeatureStrip& strip, const StripOptions& options,
-                        bool noisy_mesh);
+                        const LineContext& line);
 
 /// The plane polyline of the line's vertices, turning angles from the surface (exposed for tests).
 std::vector<Eigen::Vector2d> embed_line(const PreparedMesh& mesh, const std::vector<std::uint32_t>& line);

@@ -401,11 +401,12 @@ void iterate_snake(const SnakeRun& run, SnakeResult& result, const Cancellation*
 
 }  // namespace
 
-double strip_feature_strength(const PreparedMesh& pm, const FeatureStrip& strip, const SnakeOptions& o) {
+double strip_feature_strength(const PreparedMesh& pm, const FeatureStrip& strip, const SnakeOptions& o,
+                              const LineContext& line) {
   std::vector<double> strength;
   strength.reserve(strip.vertices.size());
   for (auto v : strip.vertices)
-    strength.push_back(std::min(feature_value(pm.curvature, v, o.feature_sign) / pm.curvature_scale, o.curvature_cap));
+    strength.push_back(std::min(feature_value(pm.curvature, v, line.feature_sign) / pm.curvature_scale, o.curvature_cap));
   if (strength.empty()) return 0;
   return value_of_rank(strength, std::size_t(0.9 * double(strength.size() - 1)));
 }
@@ -434,14 +435,14 @@ StripPoint locate_by_walking(const FeatureStrip& strip, const FlatStrip& flat, s
 }
 
 SnakeResult refine_with_snake(const PreparedMesh& pm, const FeatureStrip& strip, const FlatStrip& flat,
-                              const SnakeOptions& o, const Cancellation* cancel) {
+                              const SnakeOptions& o, const LineContext& line, const Cancellation* cancel) {
   check_snake_options(o);
   SnakeResult result;
   const double unit = strip.mean_edge_length;  // distances below are in strip edge lengths
-  const ForceField force = build_force_field(pm, strip, flat, o, unit);
+  const ForceField force = build_force_field(pm, strip, flat, o, line.feature_sign, unit);
   const double h = o.spacing * unit;
   result.points = initial_snake(strip, flat, vertex_starts(strip, flat), h);
-  result.strip_strength = strip_feature_strength(pm, strip, o);
+  result.strip_strength = strip_feature_strength(pm, strip, o, line);
   SnakeOptions settle = o;
   if (result.strip_strength < o.featureless_below) {
     // Nothing here is more of a feature than the mesh's own surface is (on a scan, its noise):

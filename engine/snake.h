@@ -69,7 +69,8 @@ struct SnakeOptions {
   /// (1 - sharp_crest_drop) of its |C|^p is a sharp crest (a crease); its gradient across the
   /// line is zeroed so the crease itself is where the force vanishes. 0 disables.
   double sharp_crest_drop = 0.5;
-  /// +1: attract to ridges (H > 0) only, -1: valleys only, 0: |H| as in the paper.
+  /// +1: attract to ridges (H > 0) only, -1: valleys only, 0: as the line's trace or keys say
+  /// (LineContext::feature_sign is what the stages follow).
   double feature_sign = 0;
   /// true: every iteration solves Eq. (15) for moves along each point's normal only, with the
   /// smooth force linearised (its restoring stiffness on the left-hand side), and the points are
@@ -123,13 +124,15 @@ struct SnakeResult {
 /// The 90th percentile over the strip's vertices of the feature strength the force follows:
 /// |C| of the line's sign in curvature-scale units (the mesh's own 90th percentile of |C|),
 /// capped as the force caps it. Below SnakeOptions::featureless_below the strip is featureless.
-double strip_feature_strength(const PreparedMesh& mesh, const FeatureStrip& strip, const SnakeOptions& options);
+double strip_feature_strength(const PreparedMesh& mesh, const FeatureStrip& strip, const SnakeOptions& options,
+                              const LineContext& line);
 
 /// Refines the strip's line; both ends of the line stay pinned. The line's points never
 /// leave the strip: a point pushed past the strip's border stops on it.
 /// \throw CancelledError once `cancel` is requested (checked every iteration).
 SnakeResult refine_with_snake(const PreparedMesh& mesh, const FeatureStrip& strip, const FlatStrip& flat,
-                              const SnakeOptions& options = {}, const Cancellation* cancel = nullptr);
+                              const SnakeOptions& options = {}, const LineContext& line = {},
+                              const Cancellation* cancel = nullptr);
 
 /// Stage 4: maps strip points to faces, barycentric coordinates and 3D points.
 std::vector<SurfacePoint> map_to_surface(const PreparedMesh& mesh, const FeatureStrip& strip,

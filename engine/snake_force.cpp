@@ -55,10 +55,11 @@ void zero_gradient_across_sharp_crests(const FeatureStrip& strip, const FlatStri
 
 // Potential |C|^p per strip vertex: Eq. (13)'s |C| (of the line's sign, capped) raised to the
 // exponent of Eq. (15).
-std::vector<double> feature_potential(const PreparedMesh& pm, const FeatureStrip& strip, const SnakeOptions& o) {
+std::vector<double> feature_potential(const PreparedMesh& pm, const FeatureStrip& strip, const SnakeOptions& o,
+                                      double feature_sign) {
   std::vector<double> potential(strip.vertices.size(), 0.0);
   for (std::size_t v = 0; v < potential.size(); ++v) {
-    const double s = std::min(feature_value(pm.curvature, strip.vertices[v], o.feature_sign) / pm.curvature_scale, o.curvature_cap);
+    const double s = std::min(feature_value(pm.curvature, strip.vertices[v], feature_sign) / pm.curvature_scale, o.curvature_cap);
     potential[v] = std::pow(s, o.exponent);
   }
   return potential;
@@ -129,8 +130,8 @@ std::vector<Eigen::Matrix2d> force_jacobians(const FeatureStrip& strip, const Fl
 }  // namespace
 
 ForceField build_force_field(const PreparedMesh& pm, const FeatureStrip& strip, const FlatStrip& flat, const SnakeOptions& o,
-                             double unit) {
-  const std::vector<double> potential = feature_potential(pm, strip, o);
+                             double feature_sign, double unit) {
+  const std::vector<double> potential = feature_potential(pm, strip, o, feature_sign);
   TriangleGradients triangles = triangle_gradients(strip, flat, potential, unit);
   ForceField field;
   field.kind = o.force;

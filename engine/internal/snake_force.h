@@ -20,9 +20,10 @@ struct ForceField {
   std::vector<Eigen::Matrix2d> jacobian;           ///< smooth force: its Jacobian per triangle
 };
 
-/// The force of `o.force` over the strip, in units of `unit` (the strip's mean edge length).
+/// The force of `o.force` toward features of `feature_sign` (LineContext::feature_sign) over the
+/// strip, in units of `unit` (the strip's mean edge length).
 ForceField build_force_field(const PreparedMesh& mesh, const FeatureStrip& strip, const FlatStrip& flat,
-                             const SnakeOptions& o, double unit);
+                             const SnakeOptions& o, double feature_sign, double unit);
 
 /// The force at a point of the strip.
 inline Eigen::Vector2d force_at(const ForceField& field, const FeatureStrip& strip, const StripPoint& p) {

@@ -75,7 +75,7 @@ TEST(FeatureStrip, FlatteningAPlaneIsAnIsometry) {
     options.rings = 3;
     options.flattening = flattening;
     const auto strip = extract_feature_strip(*mesh, line.vertices, options);
-    const auto flat = flatten_strip(*mesh, strip, options, /*noisy_mesh=*/false);
+    const auto flat = flatten_strip(*mesh, strip, options, LineContext{});
     EXPECT_EQ(flat.flipped_triangles, 0u);
     for (std::size_t t = 0; t < strip.triangles.size(); ++t) {
       ASSERT_TRUE(flat.triangle_valid[t]);
@@ -102,7 +102,7 @@ TEST(FeatureStrip, ConformalLayoutKeepsANoisyWideStripInTheSnakesDomain) {
     options.rings = 8;
     options.flattening = flattening;
     const auto strip = extract_feature_strip(*mesh, line.vertices, options);
-    const auto flat = flatten_strip(*mesh, strip, options, /*noisy_mesh=*/false);
+    const auto flat = flatten_strip(*mesh, strip, options, LineContext{});
     for (std::size_t i = 0; i < strip.vertices.size(); ++i) ASSERT_TRUE(flat.placed[i]);
     // The line's own edges keep their lengths in both layouts.
     for (std::size_t i = 1; i < strip.line.size(); ++i)
@@ -131,7 +131,7 @@ TEST(FeatureStrip, EmbeddedLineKeepsEdgeLengthsAndAnglesOnDevelopableSurface) {
   StripOptions options;
   options.rings = 2;
   const auto strip = extract_feature_strip(*mesh, line.vertices, options);
-  const auto flat = flatten_strip(*mesh, strip, {}, /*noisy_mesh=*/false);
+  const auto flat = flatten_strip(*mesh, strip, {}, LineContext{});
   EXPECT_EQ(flat.flipped_triangles, 0u);
   for (std::size_t t = 0; t < strip.triangles.size(); ++t) {
     const auto& tri = strip.triangles[t];
@@ -163,7 +163,7 @@ TEST(FeatureStrip, BoundaryInsideTheStripIsHandled) {
   const auto mesh = prepare_mesh(raw);
   const auto line = find_initial_line(*mesh, {nearest_vertex(raw, -0.9, -0.95), nearest_vertex(raw, 0.9, -0.95)}, false);
   const auto strip = extract_feature_strip(*mesh, line.vertices);
-  const auto flat = flatten_strip(*mesh, strip, {}, /*noisy_mesh=*/false);
+  const auto flat = flatten_strip(*mesh, strip, {}, LineContext{});
   EXPECT_EQ(flat.flipped_triangles, 0u);
   std::size_t placed = 0;
   for (char p : flat.placed) placed += p;

@@ -31,16 +31,17 @@ RidgeStrip straight_ridge() {
   const auto keys = keys_on_crest(r.field, {-0.6, 0.6});
   const auto line = find_initial_line(*r.mesh, keys, false);
   r.strip = extract_feature_strip(*r.mesh, line.vertices);
-  r.flat = flatten_strip(*r.mesh, r.strip, {}, /*noisy_mesh=*/false);
+  r.flat = flatten_strip(*r.mesh, r.strip, {}, LineContext{});
   return r;
 }
 
 SnakeOptions ridge_options(SnakeForce force) {
   SnakeOptions o;
   o.force = force;
-  o.feature_sign = 1;
   return o;
 }
+
+constexpr double kRidges = 1;  // the lines' feature sign (LineContext::feature_sign)
 
 // The plane direction from strip vertex v towards the crest: the field's crest is y = 0.1234,
 // and the strip's layout maps the surface's +y side of the line to one side of the flattened
@@ -66,7 +67,7 @@ double crest_offset(const RidgeStrip& r, std::uint32_t local) {
 TEST(SnakeForce, BothModelsPointTowardsASmoothRidgesCrestFromEitherSide) {
   const RidgeStrip r = straight_ridge();
   for (SnakeForce kind : {SnakeForce::smooth, SnakeForce::paper}) {
-    const ForceField field = build_force_field(*r.mesh, r.strip, r.flat, ridge_options(kind), r.strip.mean_edge_length);
+    const ForceField field = build_force_field(*r.mesh, r.strip, r.flat, ridge_options(kind), kRidges, r.strip.mean_edge_length);
     int checked = 0, towards = 0;
     for (std::uint32_t t = 0; t < r.strip.triangles.size(); ++t) {
       if (!r.flat.triangle_valid[t]) continue;
@@ -90,7 +91,7 @@ TEST(SnakeForce, BothModelsPointTowardsASmoothRidgesCrestFromEitherSide) {
 TEST(SnakeForce, TheSmoothForcesJacobianIsItsDerivativeInsideATriangle) {
   const RidgeStrip r = straight_ridge();
   const double unit = r.strip.mean_edge_length;
-  const ForceField field = build_force_field(*r.mesh, r.strip, r.flat, ridge_options(SnakeForce::smooth), unit);
+  const ForceField field = build_force_field(*r.mesh, r.strip, r.flat, ridge_options(SnakeForce::smooth), kRidges, unit);
   ASSERT_EQ(field.jacobian.size(), r.strip.triangles.size());
   int checked = 0;
   for (std::uint32_t t = 0; t < r.strip.triangles.size(); t += 7) {
@@ -119,17 +120,16 @@ TEST(SnakeForce, AtASharpCreaseTheSmoothForceHasNoComponentAcrossTheLine) {
   // A straight run of the top outline, a 90-degree convex crease, as the line.
   const std::vector<std::uint32_t> line(part.top_outline.begin(), part.top_outline.begin() + 12);
   const FeatureStrip strip = extract_feature_strip(*mesh, line);
-  const FlatStrip flat = flatten_strip(*mesh, strip, {}, /*noisy_mesh=*/false);
+  const FlatStrip flat = flatten_strip(*mesh, strip, {}, LineContext{});
   const auto across = [&](const ForceField& field, std::size_t i) {
     const auto a = strip.line[i - 1], b = strip.line[i + 1];
     const Eigen::Vector2d tangent = (flat.uv[b] - flat.uv[a]).normalized();
     return std::abs(field.vertex_gradient[strip.line[i]].dot(Eigen::Vector2d(-tangent.y(), tangent.x())));
   };
   SnakeOptions o;
-  o.feature_sign = 1;
-  const ForceField sharp = build_force_field(*mesh, strip, flat, o, strip.mean_edge_length);
+  const ForceField sharp = build_force_field(*mesh, strip, flat, o, kRidges, strip.mean_edge_length);
   o.sharp_crest_drop = 0;  // the rule off: the mean of the one-sided gradients
-  const ForceField averaged = build_force_field(*mesh, strip, flat, o, strip.mean_edge_length);
+  const ForceField averaged = build_force_field(*mesh, strip, flat, o, kRidges, strip.mean_edge_length);
   double largest_without = 0;
   for (std::size_t i = 2; i + 2 < strip.line.size(); ++i) {
     EXPECT_LT(across(sharp, i), 1e-9 * (1 + sharp.vertex_gradient[strip.line[i]].norm())) << "line vertex " << i;

@@ -30,7 +30,7 @@ struct Piece {
 Piece refine_piece(const PreparedMesh& mesh, const std::vector<std::uint32_t>& keys, const SnakeOptions& options = {}) {
   const auto line = find_initial_line(mesh, keys, false);
   const auto strip = extract_feature_strip(mesh, line.vertices);
-  const auto flat = flatten_strip(mesh, strip, {}, /*noisy_mesh=*/false);
+  const auto flat = flatten_strip(mesh, strip, {}, LineContext{});
   Piece piece{refine_with_snake(mesh, strip, flat, options), {}};
   for (const auto& p : map_to_surface(mesh, strip, piece.snake.points)) piece.points.push_back(p.position);
   return piece;
@@ -95,7 +95,7 @@ TEST(Snake, PinnedEndsPointsOnSurfaceAndInsideStrip) {
   const auto keys = keys_on_crest(field, {-0.7, 0.7});
   const auto line = find_initial_line(*mesh, keys, false);
   const auto strip = extract_feature_strip(*mesh, line.vertices);
-  const auto flat = flatten_strip(*mesh, strip, {}, /*noisy_mesh=*/false);
+  const auto flat = flatten_strip(*mesh, strip, {}, LineContext{});
   const auto snake = refine_with_snake(*mesh, strip, flat);
   const auto points = map_to_surface(*mesh, strip, snake.points);
   EXPECT_EQ(points.front().position, mesh->positions[keys[0]]);
