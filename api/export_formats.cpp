@@ -256,7 +256,7 @@ std::string lines_to_csv(const std::vector<FeatureLineResult>& lines) {
 
 SegmentedSurface segmented_surface(const PreparedMesh& mesh, const SegmentationResult& result) {
   if (result.remeshed) return {result.positions, result.triangles};
-  return {mesh.positions, mesh.triangles};
+  return {mesh.positions(), mesh.triangles()};
 }
 
 std::string segmentation_to_ply(const PreparedMesh& mesh, const SegmentationResult& result) {

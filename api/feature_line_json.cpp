@@ -112,7 +112,7 @@ json feature_line_to_json(const FeatureLineResult& r) {
 }
 
 json mesh_info_to_json(const PreparedMesh& m, double load_ms) {
-  const MeshStatistics& s = m.statistics;
+  const MeshStatistics& s = m.statistics();
   return {
       {"vertices", s.vertices},
       {"faces", s.faces},
@@ -144,8 +144,8 @@ json mesh_info_to_json(const PreparedMesh& m, double load_ms) {
         {"crease_angle", s.crease_angle},
         {"crease_edges", s.crease_edges}}},
       {"memory_bytes", m.memory_bytes()},
-      {"warnings", m.warnings},
-      {"timings_ms", {{"load", load_ms}, {"prepare", m.prepare_ms}}},
+      {"warnings", m.warnings()},
+      {"timings_ms", {{"load", load_ms}, {"prepare", m.prepare_ms()}}},
   };
 }
 

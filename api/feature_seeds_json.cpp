@@ -11,7 +11,7 @@ json vertex_seeds_json(const PreparedMesh& mesh, const std::vector<FeatureVertex
   json out = json::array();
   for (const auto& s : seeds)
     out.push_back({{"vertex", s.vertex},
-                   {"point", point_json(mesh.positions[s.vertex])},
+                   {"point", point_json(mesh.positions()[s.vertex])},
                    {"curvature", s.curvature},
                    {"strength", s.strength},
                    {"direction", s.direction ? point_json(*s.direction) : json(nullptr)}});
@@ -24,7 +24,7 @@ json feature_seeds_to_json(const PreparedMesh& mesh, const FeatureSeeds& seeds) 
   json chains = json::array();
   for (const auto& c : seeds.crease_chains) {
     json points = json::array();
-    for (auto v : c.vertices) points.push_back(point_json(mesh.positions[v]));
+    for (auto v : c.vertices) points.push_back(point_json(mesh.positions()[v]));
     chains.push_back({{"sign", to_string(c.sign)},
                       {"closed", c.closed},
                       {"edges", c.edges()},

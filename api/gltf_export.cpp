@@ -95,13 +95,13 @@ tinygltf::Model build_model(const PreparedMesh& pm, const std::vector<FeatureLin
     mesh.name = "surface";
     tinygltf::Primitive primitive;
     primitive.mode = TINYGLTF_MODE_TRIANGLES;
-    primitive.attributes["POSITION"] = add_positions(model, pm.positions);
+    primitive.attributes["POSITION"] = add_positions(model, pm.positions());
     std::vector<float> normals, curvature;
     for (std::size_t v = 0; v < pm.n_vertices(); ++v) {
-      Eigen::Vector3d n = pm.vertex_normals[v];
+      Eigen::Vector3d n = pm.vertex_normals()[v];
       if (!(n.norm() > 0.5)) n = Eigen::Vector3d(0, 0, 1);  // isolated vertices still need a unit normal
       for (int k = 0; k < 3; ++k) normals.push_back(float(n[k]));
-      curvature.push_back(float(dominant_curvature(pm.curvature, std::uint32_t(v))));
+      curvature.push_back(float(dominant_curvature(pm.curvature(), std::uint32_t(v))));
     }
     int view = add_view(model, normals.data(), normals.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
     primitive.attributes["NORMAL"] = add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, pm.n_vertices());
@@ -109,8 +109,8 @@ tinygltf::Model build_model(const PreparedMesh& pm, const std::vector<FeatureLin
     primitive.attributes["_CURVATURE"] =
         add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, pm.n_vertices());
     std::vector<std::uint32_t> indices;
-    indices.reserve(pm.triangles.size() * 3);
-    for (const auto& t : pm.triangles) indices.insert(indices.end(), t.begin(), t.end());
+    indices.reserve(pm.triangles().size() * 3);
+    for (const auto& t : pm.triangles()) indices.insert(indices.end(), t.begin(), t.end());
     view = add_view(model, indices.data(), indices.size() * sizeof(std::uint32_t), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
     primitive.indices =
         add_accessor(model, view, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, indices.size());
@@ -196,11 +196,11 @@ std::vector<double> as_values(const std::vector<std::uint16_t>& v) { return {v.b
 // The quantised positions, and the node transform that maps their integers back.
 void quantise_positions(const PreparedMesh& pm, std::vector<CompactVertex>& vertices, tinygltf::Node& node) {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(0), hi = Eigen::Vector3d::Constant(0);
-  if (!pm.positions.empty()) lo = hi = pm.positions[0];
-  for (const auto& p : pm.positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  if (!pm.positions().empty()) lo = hi = pm.positions()[0];
+  for (const auto& p : pm.positions()) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   const Eigen::Vector3d extent = hi - lo;
   for (std::size_t v = 0; v < vertices.size(); ++v)
-    for (int k = 0; k < 3; ++k) vertices[v].position[k] = quantise(pm.positions[v][k], lo[k], extent[k]);
+    for (int k = 0; k < 3; ++k) vertices[v].position[k] = quantise(pm.positions()[v][k], lo[k], extent[k]);
   node.translation = {lo[0], lo[1], lo[2]};
   node.scale.clear();
   for (int k = 0; k < 3; ++k) node.scale.push_back(extent[k] > 0 ? extent[k] / 65535.0 : 1.0);
@@ -210,12 +210,12 @@ void quantise_positions(const PreparedMesh& pm, std::vector<CompactVertex>& vert
 std::array<double, 2> quantise_curvature(const PreparedMesh& pm, std::vector<CompactVertex>& vertices) {
   double lo = HUGE_VAL, hi = -HUGE_VAL;
   for (std::size_t v = 0; v < vertices.size(); ++v) {
-    const double c = dominant_curvature(pm.curvature, std::uint32_t(v));
+    const double c = dominant_curvature(pm.curvature(), std::uint32_t(v));
     lo = std::min(lo, c), hi = std::max(hi, c);
   }
   if (!(lo <= hi)) lo = hi = 0;
   for (std::size_t v = 0; v < vertices.size(); ++v)
-    vertices[v].curvature = quantise(dominant_curvature(pm.curvature, std::uint32_t(v)), lo, hi - lo);
+    vertices[v].curvature = quantise(dominant_curvature(pm.curvature(), std::uint32_t(v)), lo, hi - lo);
   return {lo, hi - lo};
 }
 
@@ -244,8 +244,8 @@ void add_compact_indices(tinygltf::Model& model, tinygltf::Primitive& primitive,
   auto add = [&](auto zero, int component) {
     using Index = decltype(zero);
     std::vector<Index> indices;
-    indices.reserve(pm.triangles.size() * 3);
-    for (const auto& t : pm.triangles)
+    indices.reserve(pm.triangles().size() * 3);
+    for (const auto& t : pm.triangles())
       for (auto v : t) indices.push_back(Index(v));
     const int view = add_view(model, indices.data(), indices.size() * sizeof(Index), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
     primitive.indices = add_accessor(model, view, component, TINYGLTF_TYPE_SCALAR, indices.size());
@@ -268,8 +268,8 @@ void add_crease_lines(tinygltf::Model& model, tinygltf::Mesh& mesh, const Prepar
   for (const int sign : {1, -1}) {
     std::vector<std::uint32_t> pairs;
     for (std::uint32_t v = 0; v < pm.n_vertices(); ++v)
-      for (std::uint32_t i = pm.neighbor_offsets[v]; i < pm.neighbor_offsets[v + 1]; ++i)
-        if (pm.curvature.crease[i] == sign && v < pm.neighbors[i]) pairs.insert(pairs.end(), {v, pm.neighbors[i]});
+      for (std::uint32_t i = pm.neighbor_offsets()[v]; i < pm.neighbor_offsets()[v + 1]; ++i)
+        if (pm.curvature().crease[i] == sign && v < pm.neighbors()[i]) pairs.insert(pairs.end(), {v, pm.neighbors()[i]});
     if (pairs.empty()) continue;
     tinygltf::Primitive primitive;
     primitive.mode = TINYGLTF_MODE_LINE;
@@ -362,7 +362,7 @@ std::string feature_line_to_glb(const PreparedMesh& mesh, const std::vector<Feat
 }
 
 std::string prepared_mesh_to_compact_glb(const PreparedMesh& pm) {
-  if (pm.triangles.empty()) throw InvalidInputError("nothing to write: the mesh has no triangle");
+  if (pm.triangles().empty()) throw InvalidInputError("nothing to write: the mesh has no triangle");
   tinygltf::Model model;
   model.asset.version = "2.0";
   model.asset.generator = "featureline";
@@ -376,8 +376,8 @@ std::string prepared_mesh_to_compact_glb(const PreparedMesh& pm) {
   add_compact_vertices(model, primitive, node, pm);
   add_compact_indices(model, primitive, pm);
   auto extras = primitive.extras.Get<tinygltf::Value::Object>();
-  extras["crease_angle"] = tinygltf::Value(pm.curvature.crease_angle);
-  extras["crease_edges"] = tinygltf::Value(int(pm.curvature.crease_edges));
+  extras["crease_angle"] = tinygltf::Value(pm.curvature().crease_angle);
+  extras["crease_edges"] = tinygltf::Value(int(pm.curvature().crease_edges));
   primitive.extras = tinygltf::Value(std::move(extras));
   tinygltf::Mesh mesh;
   mesh.name = "surface";

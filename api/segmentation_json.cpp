@@ -80,14 +80,14 @@ FeatureLineResult parse_computed_line(const json& item, const PreparedMesh& mesh
     if (!f.is_number_integer() || (!f.is_number_unsigned() && f.get<std::int64_t>() < 0))
       throw InvalidInputError(point + ": the face must be an integer >= 0");
     const auto face = f.get<std::uint64_t>();
-    if (face >= mesh.triangles.size())  // checked here too: face ids beyond uint32 must not wrap
+    if (face >= mesh.triangles().size())  // checked here too: face ids beyond uint32 must not wrap
       throw InvalidInputError(point + ": face " + std::to_string(face) + " is out of range (the mesh has " +
-                              std::to_string(mesh.triangles.size()) + " faces)");
+                              std::to_string(mesh.triangles().size()) + " faces)");
     SurfacePoint s;
     s.face = std::uint32_t(face);
     s.barycentric = barycentric_json((*barycentric)[i], point);
     check_surface_point(mesh, s.face, s.barycentric, point);
-    s.position = point_in_face(mesh, s.face, s.barycentric);
+    s.position = mesh.point_at(s.face, s.barycentric);
     line.refined.push_back(s);
   }
   return line;

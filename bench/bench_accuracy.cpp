@@ -578,7 +578,7 @@ LineOutcome run_line(const PreparedMesh& mesh, const LineSpec& spec, const Varia
     out.floor = surface_floor(mesh, spec);
     out.fitted = measure_fitted(r, spec.distance);
     if (spec.inward) out.inward = arc_length_distance(refined, r.closed, spec.inward).mean;
-    if (at.trace) trace_line(at.c.name, at.noise, at.seed, mesh.statistics.noise, r, refined, spec, out.floor);
+    if (at.trace) trace_line(at.c.name, at.noise, at.seed, mesh.statistics().noise, r, refined, spec, out.floor);
   } catch (const std::exception& e) {
     out.failed = true;
     out.error = e.what();
@@ -600,7 +600,7 @@ void run_scenario(const RawMesh& noisy, const Scenario& scenario, const std::vec
     auto& mesh = prepared[prepare_key(v.prepare)];
     if (!mesh) mesh = prepare_mesh(noisy, v.prepare);
     Row& row = results.rows[{ci, ni, vi}];
-    row.triangles = mesh->statistics.faces;
+    row.triangles = mesh->statistics().faces;
     for (const auto& spec : scenario.lines) row.lines.push_back(run_line(*mesh, spec, v, at));
   }
 }

@@ -52,9 +52,9 @@ struct PrepareBreakdown {
 };
 
 void add_timings(const PreparedMesh& mesh, PrepareBreakdown& b) {
-  const auto& t = mesh.timings;
-  const auto& c = mesh.curvature.timings;
-  b.total.push_back(mesh.prepare_ms);
+  const auto& t = mesh.timings();
+  const auto& c = mesh.curvature().timings;
+  b.total.push_back(mesh.prepare_ms());
   b.triangles.push_back(t.triangles_ms);
   b.adjacency.push_back(t.adjacency_ms);
   b.tables.push_back(t.tables_ms);
@@ -77,7 +77,7 @@ void print_breakdown(const std::string& name, const PrepareBreakdown& b) {
 
 void dump_curvature(const PreparedMesh& mesh, const std::string& path) {
   std::ofstream out(path);
-  const CurvatureField& f = mesh.curvature;
+  const CurvatureField& f = mesh.curvature();
   char line[128];
   std::snprintf(line, sizeof line, "noise %.17g radius %.17g passes %d crease_angle %.17g crease_edges %zu\n", f.noise,
                 f.radius, f.smoothing_passes, f.crease_angle, f.crease_edges);
@@ -137,7 +137,7 @@ LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, const Featu
 
 void print_row(const std::string& name, KeyMode mode, const PreparedMesh& mesh, double load_ms, const LineRow& r) {
   std::printf("%-20s %-7s %9zu %8.1f %8.1f | %5zu %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f | %6.0f %5.0f %6zu\n",
-              name.c_str(), to_string(mode), mesh.statistics.faces, load_ms, mesh.prepare_ms, r.lines, r.initial,
+              name.c_str(), to_string(mode), mesh.statistics().faces, load_ms, mesh.prepare_ms(), r.lines, r.initial,
               r.strip, r.flatten, r.snake, r.median_total, r.p90_total, r.iterations, r.per_piece, r.fallbacks);
   if (r.fitted >= 0) std::printf("%-20s %-7s   fitted curve: median %.3f ms per line (beside total)\n", "", "", r.fitted);
 }
@@ -201,8 +201,8 @@ int main(int argc, char** argv) {
         const LineRow row = run_lines(*mesh, mode, lines, options);
         print_row(name, mode, *mesh, load_ms, row);
         auto& [smallest, largest] = extremes[int(mode)];
-        if (mesh->statistics.faces < smallest.faces) smallest = {mesh->statistics.faces, row.median_total};
-        if (mesh->statistics.faces > largest.faces) largest = {mesh->statistics.faces, row.median_total};
+        if (mesh->statistics().faces < smallest.faces) smallest = {mesh->statistics().faces, row.median_total};
+        if (mesh->statistics().faces > largest.faces) largest = {mesh->statistics().faces, row.median_total};
       }
     } catch (const std::exception& e) {
       std::printf("%s: %s\n", path.c_str(), e.what());

@@ -52,10 +52,10 @@ struct Model {
 // Closed curves where a plane meets the mesh, as points on edges (one per crossed edge).
 std::vector<std::vector<Eigen::Vector3d>> plane_loops(const PreparedMesh& mesh, const Eigen::Vector3d& normal,
                                                       double offset, std::vector<std::vector<std::uint32_t>>* edge_ends) {
-  const auto& tris = mesh.triangles;
+  const auto& tris = mesh.triangles();
   std::vector<double> s(mesh.n_vertices());
   for (std::size_t v = 0; v < s.size(); ++v) {
-    s[v] = normal.dot(mesh.positions[v]) - offset;
+    s[v] = normal.dot(mesh.positions()[v]) - offset;
     if (s[v] == 0) s[v] = 1e-300;  // a vertex on the plane counts as above it
   }
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> faces_of;
@@ -76,7 +76,7 @@ std::vector<std::vector<Eigen::Vector3d>> plane_loops(const PreparedMesh& mesh, 
     for (std::size_t guard = 0; guard < tris.size(); ++guard) {
       const auto [a, b] = edge;
       const double t = s[a] / (s[a] - s[b]);
-      loop.push_back((1 - t) * mesh.positions[a] + t * mesh.positions[b]);
+      loop.push_back((1 - t) * mesh.positions()[a] + t * mesh.positions()[b]);
       ends.push_back(t < 0.5 ? a : b);
       if (used[f]) {
         closed = true;
@@ -149,11 +149,11 @@ double area_of(const std::vector<Eigen::Vector3d>& p, const std::vector<std::arr
 
 // The tables prepare_mesh keeps for segmentation and point keys, per triangle.
 void print_table_memory(const PreparedMesh& mesh) {
-  const double faces = double(mesh.triangles.size());
-  const double face_tables = double((mesh.vertex_faces.offsets.capacity() + mesh.vertex_faces.faces.capacity()) * 4 +
-                                    mesh.face_neighbors.capacity() * 12 + mesh.boundary_vertex.capacity());
+  const double faces = double(mesh.triangles().size());
+  const double face_tables = double((mesh.vertex_faces().offsets.capacity() + mesh.vertex_faces().faces.capacity()) * 4 +
+                                    mesh.face_neighbors().capacity() * 12 + mesh.boundary_vertex().capacity());
   std::printf("  built once: face tables %.1f B/triangle, vertex index %.1f B/triangle (prepared mesh in all: %.1f B/triangle)\n",
-              face_tables / faces, double(mesh.vertex_index.memory_bytes()) / faces, double(mesh.memory_bytes()) / faces);
+              face_tables / faces, double(mesh.vertex_index().memory_bytes()) / faces, double(mesh.memory_bytes()) / faces);
 }
 
 // Point keys ({"point": [x, y, z]}) snapped to the nearest vertex: the prepared mesh's k-d tree
@@ -161,9 +161,9 @@ void print_table_memory(const PreparedMesh& mesh) {
 void print_point_key_times(const PreparedMesh& mesh) {
   std::vector<Eigen::Vector3d> queries;
   for (std::size_t v = 0; v < mesh.n_vertices(); v += std::max<std::size_t>(1, mesh.n_vertices() / 1000))
-    queries.push_back(mesh.positions[v] + 0.3 * mesh.statistics.mean_edge_length * Eigen::Vector3d(0.31, -0.52, 0.17));
+    queries.push_back(mesh.positions()[v] + 0.3 * mesh.statistics().mean_edge_length * Eigen::Vector3d(0.31, -0.52, 0.17));
   auto start = Clock::now();
-  const VertexIndex index(mesh.positions, mesh.component);
+  const VertexIndex index(mesh.positions(), mesh.component());
   const double build_ms = ms_since(start);
   std::size_t disagree = 0;
   start = Clock::now();
@@ -175,8 +175,8 @@ void print_point_key_times(const PreparedMesh& mesh) {
     std::uint32_t best = 0;
     double best_d = HUGE_VAL;
     for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
-      if (mesh.component[v] < 0) continue;
-      const double d = (mesh.positions[v] - queries[i]).squaredNorm();
+      if (mesh.component()[v] < 0) continue;
+      const double d = (mesh.positions()[v] - queries[i]).squaredNorm();
       if (d < best_d) best_d = d, best = v;
     }
     disagree += best != found[i];
@@ -192,8 +192,8 @@ bool bench_model(const Model& model, int repeat) {
   const std::string path = std::string(FEATURELINE_SHARED_DIR) + "/data/meshes/" + model.file;
   bool ok = true;
   const auto mesh = prepare_mesh(read_mesh_file(path));
-  std::printf("%s: %zu vertices, %zu triangles, prepare %.1f ms\n", model.file, mesh->statistics.vertices,
-              mesh->statistics.faces, mesh->prepare_ms);
+  std::printf("%s: %zu vertices, %zu triangles, prepare %.1f ms\n", model.file, mesh->statistics().vertices,
+              mesh->statistics().faces, mesh->prepare_ms());
   print_table_memory(*mesh);
   std::vector<FeatureLineResult> lines;
   for (const auto& cut : model.cuts) {
@@ -228,7 +228,7 @@ bool bench_model(const Model& model, int repeat) {
                 line.refined_length);
     lines.push_back(std::move(line));
   }
-  const double area = area_of(mesh->positions, mesh->triangles);
+  const double area = area_of(mesh->positions(), mesh->triangles());
   for (auto mode : {SegmentationMode::snap, SegmentationMode::remesh}) {
     const auto timed = run(*mesh, lines, mode, repeat);
     const auto& r = timed.result;
@@ -236,7 +236,7 @@ bool bench_model(const Model& model, int repeat) {
                 timed.ms, r.segments.size(), r.cut_edges);
     if (r.remeshed)
       std::printf(", +%zu vertices, +%zu triangles, area change %.1e", r.positions.size() - mesh->n_vertices(),
-                  r.triangles.size() - mesh->triangles.size(), std::abs(r.total_area - area) / area);
+                  r.triangles.size() - mesh->triangles().size(), std::abs(r.total_area - area) / area);
     std::printf("\n    label    faces        area   area%%  boundary   bbox centre\n");
     for (const auto& s : r.segments)
       std::printf("    %5d %8zu %11.6f %6.2f%% %9.5f   (%.3f, %.3f, %.3f)\n", s.label, s.faces, s.area,
@@ -291,7 +291,7 @@ int main(int argc, char** argv) {
   // The largest shared mesh, for the memory the tables add.
   try {
     const auto igea = prepare_mesh(read_mesh_file(std::string(FEATURELINE_SHARED_DIR) + "/data/meshes/igea.ply"));
-    std::printf("igea.ply: %zu triangles\n", igea->triangles.size());
+    std::printf("igea.ply: %zu triangles\n", igea->triangles().size());
     print_table_memory(*igea);
     print_point_key_times(*igea);
   } catch (const std::exception& e) {

@@ -127,7 +127,7 @@ void speed_row(const std::string& path, int runs) {
   }
   const std::string name = path.substr(path.find_last_of('/') + 1);
   std::printf("| %s | %zu | %zu | %zu | %zu | %.0f | %.0f | %.2f | %.2f | %.2f | %.1f | %zu: %.2f | %.1f | %.1f |\n", name.c_str(),
-              mesh->statistics.faces, edges.size(), refused, closed, median(edges), quantile(edges, 1.0), median(trace_ms),
+              mesh->statistics().faces, edges.size(), refused, closed, median(edges), quantile(edges, 1.0), median(trace_ms),
               quantile(trace_ms, 0.9), quantile(trace_ms, 1.0), median(per_edge_us), long_ms.size(), median(long_ms),
               median(line_ms), quantile(line_ms, 0.9));
 }

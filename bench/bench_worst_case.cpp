@@ -55,8 +55,8 @@ std::uint32_t farthest_from(const PreparedMesh& mesh, std::uint32_t v) {
   std::uint32_t best = v;
   double best_d = -1;
   for (std::uint32_t w = 0; w < mesh.n_vertices(); ++w) {
-    if (mesh.component[w] != mesh.component[v]) continue;
-    const double d = (mesh.positions[w] - mesh.positions[v]).squaredNorm();
+    if (mesh.component()[w] != mesh.component()[v]) continue;
+    const double d = (mesh.positions()[w] - mesh.positions()[v]).squaredNorm();
     if (d > best_d) best_d = d, best = w;
   }
   return best;
@@ -69,7 +69,7 @@ std::vector<std::uint32_t> keys_along_walk(const PreparedMesh& mesh, std::uint32
                                            std::mt19937_64& rng) {
   const auto free_neighbours = [&](std::uint32_t v, const std::vector<char>& used) {
     int count = 0;
-    for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) count += !used[mesh.neighbors[k]];
+    for (auto k = mesh.neighbor_offsets()[v]; k < mesh.neighbor_offsets()[v + 1]; ++k) count += !used[mesh.neighbors()[k]];
     return count;
   };
   std::vector<char> used(mesh.n_vertices(), 0);
@@ -79,8 +79,8 @@ std::vector<std::uint32_t> keys_along_walk(const PreparedMesh& mesh, std::uint32
   for (std::size_t step = 1; out.size() < keys && step < keys * std::size_t(stride) * 4; ++step) {
     std::vector<std::uint32_t> free;
     int fewest = 1 << 30;
-    for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) {
-      const auto w = mesh.neighbors[k];
+    for (auto k = mesh.neighbor_offsets()[v]; k < mesh.neighbor_offsets()[v + 1]; ++k) {
+      const auto w = mesh.neighbors()[k];
       if (used[w]) continue;
       const int onward = free_neighbours(w, used);
       if (onward < fewest) free.clear(), fewest = onward;
@@ -153,7 +153,7 @@ int main(int argc, char** argv) {
   for (const auto& path : meshes) {
     try {
       const auto mesh = prepare_mesh(read_mesh_file(path));
-      std::printf("%s: %zu triangles\n", path.c_str(), mesh->triangles.size());
+      std::printf("%s: %zu triangles\n", path.c_str(), mesh->triangles().size());
       std::printf("%-30s %-8s %5s %6s %6s %7s %7s %5s %9s %9s %9s %9s\n", "line", "options", "keys", "edges", "pieces",
                   "points", "iters", "caps", "initial", "snake", "median_ms", "max_ms");
       std::mt19937_64 rng(20261201);

@@ -14,8 +14,8 @@ std::vector<std::uint32_t> ring_at(const PreparedMesh& mesh, std::uint32_t sourc
   for (int r = 0; r < rings; ++r) {
     next.clear();
     for (auto v : frontier)
-      for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) {
-        const auto w = mesh.neighbors[k];
+      for (auto k = mesh.neighbor_offsets()[v]; k < mesh.neighbor_offsets()[v + 1]; ++k) {
+        const auto w = mesh.neighbors()[k];
         if (seen.insert(w).second) next.push_back(w);
       }
     frontier.swap(next);
@@ -28,17 +28,17 @@ std::vector<std::uint32_t> ring_at(const PreparedMesh& mesh, std::uint32_t sourc
 // Three keys along a feature: a random high-curvature vertex, then the most curved vertex
 // of the same sign 12 and 24 rings away (the second farther from the first than the middle).
 std::vector<std::uint32_t> pick_feature_keys(const PreparedMesh& mesh, std::mt19937_64& rng) {
-  const double threshold = mesh.statistics.abs_curvature_p90;
+  const double threshold = mesh.statistics().abs_curvature_p90;
   for (int attempt = 0; attempt < 1000; ++attempt) {
     const auto v0 = std::uint32_t(rng() % mesh.n_vertices());
-    if (mesh.component[v0] < 0 || std::abs(dominant_curvature(mesh.curvature, v0)) < threshold) continue;
-    const double sign = dominant_curvature(mesh.curvature, v0) > 0 ? 1 : -1;
+    if (mesh.component()[v0] < 0 || std::abs(dominant_curvature(mesh.curvature(), v0)) < threshold) continue;
+    const double sign = dominant_curvature(mesh.curvature(), v0) > 0 ? 1 : -1;
     auto best_in = [&](const std::vector<std::uint32_t>& ring, std::uint32_t not_near) {
       std::uint32_t best = ring.empty() ? v0 : ring[0];
       double best_score = -1e300;
       for (auto v : ring) {
-        const double score = sign * dominant_curvature(mesh.curvature, v) +
-                             (not_near == v0 ? 0 : 1e-3 * (mesh.positions[v] - mesh.positions[not_near]).norm());
+        const double score = sign * dominant_curvature(mesh.curvature(), v) +
+                             (not_near == v0 ? 0 : 1e-3 * (mesh.positions()[v] - mesh.positions()[not_near]).norm());
         if (score > best_score) best_score = score, best = v;
       }
       return best;
@@ -47,7 +47,7 @@ std::vector<std::uint32_t> pick_feature_keys(const PreparedMesh& mesh, std::mt19
     if (ring12.empty() || ring24.empty()) continue;
     const auto v1 = best_in(ring12, v0);
     const auto v2 = best_in(ring24, v0);
-    if (v1 == v2 || (mesh.positions[v2] - mesh.positions[v0]).norm() < (mesh.positions[v1] - mesh.positions[v0]).norm()) continue;
+    if (v1 == v2 || (mesh.positions()[v2] - mesh.positions()[v0]).norm() < (mesh.positions()[v1] - mesh.positions()[v0]).norm()) continue;
     return {v0, v1, v2};
   }
   return {};
@@ -59,14 +59,14 @@ std::vector<std::uint32_t> pick_feature_keys(const PreparedMesh& mesh, std::mt19
 std::vector<std::uint32_t> pick_random_keys(const PreparedMesh& mesh, std::mt19937_64& rng, int spacing) {
   for (int attempt = 0; attempt < 1000; ++attempt) {
     const auto v0 = std::uint32_t(rng() % mesh.n_vertices());
-    if (mesh.component[v0] < 0) continue;
+    if (mesh.component()[v0] < 0) continue;
     const auto ring1 = ring_at(mesh, v0, spacing);
     if (ring1.empty()) continue;
     const auto v1 = ring1[rng() % ring1.size()];
     auto ring2 = ring_at(mesh, v1, spacing);
-    const double reach = (mesh.positions[v1] - mesh.positions[v0]).norm();
+    const double reach = (mesh.positions()[v1] - mesh.positions()[v0]).norm();
     ring2.erase(std::remove_if(ring2.begin(), ring2.end(),
-                               [&](std::uint32_t v) { return (mesh.positions[v] - mesh.positions[v0]).norm() < reach; }),
+                               [&](std::uint32_t v) { return (mesh.positions()[v] - mesh.positions()[v0]).norm() < reach; }),
                 ring2.end());
     if (ring2.empty()) continue;
     return {v0, v1, ring2[rng() % ring2.size()]};

@@ -45,7 +45,7 @@ std::array<double, 3> nearest_on_triangle(const Eigen::Vector3d& x, const Eigen:
 std::vector<double> arc_lengths(const PreparedMesh& mesh, const std::vector<std::uint32_t>& chain) {
   std::vector<double> s(chain.size(), 0.0);
   for (std::size_t i = 1; i < chain.size(); ++i)
-    s[i] = s[i - 1] + (mesh.positions[chain[i]] - mesh.positions[chain[i - 1]]).norm();
+    s[i] = s[i - 1] + (mesh.positions()[chain[i]] - mesh.positions()[chain[i - 1]]).norm();
   return s;
 }
 
@@ -64,14 +64,14 @@ Eigen::Vector3d regress_at(const PreparedMesh& mesh, const std::vector<std::uint
     const double w = std::exp(-0.5 * t * t);
     const Eigen::Vector3d basis(1, t, t * t);
     normal += w * basis * basis.transpose();
-    rhs += w * basis * mesh.positions[chain[j]].transpose();
+    rhs += w * basis * mesh.positions()[chain[j]].transpose();
     ++support;
   }
   const int terms = support >= 5 ? 3 : 2;
   const Eigen::MatrixXd a = normal.topLeftCorner(terms, terms);
   const Eigen::LDLT<Eigen::MatrixXd> solver(a);
   if (solver.info() != Eigen::Success || !solver.isPositive() || std::abs(a.determinant()) < 1e-12)
-    return mesh.positions[chain[i]];
+    return mesh.positions()[chain[i]];
   const Eigen::MatrixXd coefficients = solver.solve(rhs.topRows(terms));
   return coefficients.row(0).transpose();
 }
@@ -82,11 +82,10 @@ SurfacePoint nearest_surface_point_near(const PreparedMesh& mesh, std::uint32_t 
   SurfacePoint best = surface_point_at_vertex(mesh, v);
   double best_distance = (best.position - x).squaredNorm();
   auto try_faces_of = [&](std::uint32_t u) {
-    for (auto it = mesh.vertex_faces.begin(u); it != mesh.vertex_faces.end(u); ++it) {
-      const std::uint32_t f = *it;
-      const auto& t = mesh.triangles[f];
-      const auto w = nearest_on_triangle(x, mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]);
-      const Eigen::Vector3d p = w[0] * mesh.positions[t[0]] + w[1] * mesh.positions[t[1]] + w[2] * mesh.positions[t[2]];
+    for (const std::uint32_t f : mesh.faces_around(u)) {
+      const auto& t = mesh.triangles()[f];
+      const auto w = nearest_on_triangle(x, mesh.positions()[t[0]], mesh.positions()[t[1]], mesh.positions()[t[2]]);
+      const Eigen::Vector3d p = mesh.point_at(f, w);
       const double distance = (p - x).squaredNorm();
       if (distance < best_distance) {
         best_distance = distance;
@@ -95,7 +94,7 @@ SurfacePoint nearest_surface_point_near(const PreparedMesh& mesh, std::uint32_t 
     }
   };
   try_faces_of(v);
-  for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) try_faces_of(mesh.neighbors[k]);
+  for (auto k = mesh.neighbor_offsets()[v]; k < mesh.neighbor_offsets()[v + 1]; ++k) try_faces_of(mesh.neighbors()[k]);
   return best;
 }
 
@@ -107,11 +106,11 @@ CreaseFitResult fit_noisy_crease(const PreparedMesh& mesh, const std::vector<std
   const std::vector<double> s = arc_lengths(mesh, chain);
   double shift_sum = 0;
   for (std::size_t i = 1; i + 1 < chain.size(); ++i) {
-    const double edge = local_edge_length(mesh, chain[i]);
-    const Eigen::Vector3d& vertex = mesh.positions[chain[i]];
+    const double edge = mesh.local_edge_length(chain[i]);
+    const Eigen::Vector3d& vertex = mesh.positions()[chain[i]];
     const Eigen::Vector3d estimate = vertex + options.step * (regress_at(mesh, chain, s, i, options.bandwidth * edge) - vertex);
     const SurfacePoint on_surface = nearest_surface_point_near(mesh, chain[i], estimate);
-    const double shift = (on_surface.position - mesh.positions[chain[i]]).norm() / edge;
+    const double shift = (on_surface.position - mesh.positions()[chain[i]]).norm() / edge;
     if (shift > options.max_shift) {
       ++result.kept_vertices;
       continue;

@@ -242,8 +242,8 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
   std::vector<double> field(strip.vertices.size());
   std::vector<char> on_crease(strip.vertices.size());
   for (std::size_t v = 0; v < field.size(); ++v) {
-    field[v] = feature_value(mesh.curvature, strip.vertices[v], feature_sign);
-    on_crease[v] = mesh.curvature.on_crease.empty() ? 0 : mesh.curvature.on_crease[strip.vertices[v]];
+    field[v] = feature_value(mesh.curvature(), strip.vertices[v], feature_sign);
+    on_crease[v] = mesh.curvature().on_crease.empty() ? 0 : mesh.curvature().on_crease[strip.vertices[v]];
   }
   const double h = strip.mean_edge_length;
   // Creases marked by noise are scattered; a crease the line follows has its vertices within
@@ -254,7 +254,7 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
   const double largest = std::min(o.max_radius, double(strip.rings)) * h;
   // Never finer than the jet fits the field came from: on a noisy mesh their radius grows with
   // the noise, and a shorter fit across the line follows the noise they left.
-  const double smallest = std::max(o.radius, mesh.curvature.radius) * h;
+  const double smallest = std::max(o.radius, mesh.curvature().radius) * h;
   if (largest < smallest) return result;
   const double radius = line_fit_radius(flat, field, on_crease, crease_reach, points, smallest, largest);
   const std::size_t n = points.size();
@@ -264,7 +264,7 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
   normals.front() = end_normal(points, 0, radius), normals.back() = end_normal(points, 1, radius);
   // The bend over three fit radii: the crest's, not the line's ripple at the scale of one fit,
   // which measuring from it would amplify (a ripple bent one way reads as a crest bent the other).
-  const bool bent_frame = o.follow_bend && mesh.curvature.noise < kBendFrameMaxNoise;
+  const bool bent_frame = o.follow_bend && mesh.curvature().noise < kBendFrameMaxNoise;
   const std::vector<double> bends = bent_frame ? line_bends(points, normals, 3 * radius) : std::vector<double>(n, 0.0);
   const VertexGrid grid(flat, radius);
   const FitInput in{flat, grid, field, on_crease, crease_reach};

@@ -287,7 +287,7 @@ std::vector<std::uint32_t> vertex_path_along(const PreparedMesh& pm, const std::
   };
   for (std::size_t i = 1; i + 1 < points.size(); ++i) {
     const SurfacePoint& p = points[i];
-    const auto& corners = pm.triangles[p.face];
+    const auto& corners = pm.triangles()[p.face];
     const int k = int(std::max_element(p.barycentric.begin(), p.barycentric.end()) - p.barycentric.begin());
     if (!join(corners[k])) return {};
   }
@@ -368,7 +368,7 @@ bool refine_piece(const LineRun& run, PieceWork& work, std::deque<Piece>& pieces
 LineContext line_context(const PreparedMesh& pm, const FeatureLineRequest& request, const FeatureLineResult& result) {
   const FeatureLineOptions& options = request.options;
   LineContext context;
-  context.noisy_mesh = pm.curvature.noise >= options.exact_crease_noise;
+  context.noisy_mesh = pm.curvature().noise >= options.exact_crease_noise;
   context.feature_sign = options.snake.feature_sign;
   if (context.feature_sign != 0) return context;
   if (result.trace)
@@ -397,10 +397,10 @@ void check_feature_line_options(const FeatureLineOptions& options) {
 double mean_feature_strength(const PreparedMesh& pm, const std::vector<SurfacePoint>& points, double feature_sign,
                              double cap) {
   auto strength = [&](const SurfacePoint& p) {
-    const auto& corners = pm.triangles[p.face];
+    const auto& corners = pm.triangles()[p.face];
     double value = 0;
     for (int k = 0; k < 3; ++k)
-      value += p.barycentric[k] * std::min(cap, feature_value(pm.curvature, corners[k], feature_sign) / pm.curvature_scale);
+      value += p.barycentric[k] * std::min(cap, feature_value(pm.curvature(), corners[k], feature_sign) / pm.curvature_scale());
     return value;
   };
   double sum = 0, length = 0;
@@ -462,7 +462,7 @@ void fit_curve_when_asked(const PreparedMesh& pm, const FeatureLineOptions& opti
 void report_key_points(const PreparedMesh& pm, const UnrolledLine& line, const Pins& pins, FeatureLineResult& result) {
   const std::size_t keys = line.key_at.size() - (result.closed && !line.key_at.empty() ? 1 : 0);
   for (std::size_t k = 0; k < keys; ++k) {
-    const Eigen::Vector3d vertex = pm.positions[line.vertices[line.key_at[k]]];
+    const Eigen::Vector3d vertex = pm.positions()[line.vertices[line.key_at[k]]];
     Eigen::Vector3d at = vertex;
     if (const auto& pin = pins[line.key_at[k]]) {
       at = pin->position;
@@ -492,7 +492,7 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   else
     result.initial = find_initial_line(pm, request.keys, request.closed, options.initial, request.cancel);
   result.warnings = result.initial.warnings;
-  for (auto v : result.initial.vertices) result.initial_points.push_back(pm.positions[v]);
+  for (auto v : result.initial.vertices) result.initial_points.push_back(pm.positions()[v]);
   result.timings.initial_ms = ms_since(start);
 
   const bool closed = result.closed;

@@ -45,19 +45,19 @@ double crease_sign_value(FeatureSign sign) { return sign == FeatureSign::ridge ?
 
 // The adjacency entry of edge v -> w (in v's row), or kNoIndex.
 std::uint32_t entry_of(const PreparedMesh& mesh, std::uint32_t v, std::uint32_t w) {
-  for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k)
-    if (mesh.neighbors[k] == w) return k;
+  for (auto k = mesh.neighbor_offsets()[v]; k < mesh.neighbor_offsets()[v + 1]; ++k)
+    if (mesh.neighbors()[k] == w) return k;
   return kNoIndex;
 }
 
 // The angle between the normals of edge (v, w)'s two faces, radians (0: flat), as the curvature
 // stage measures it when it marks creases; 0 unless the edge has exactly two faces.
 double dihedral_angle(const PreparedMesh& mesh, std::uint32_t v, std::uint32_t w) {
-  const auto& P = mesh.positions;
+  const auto& P = mesh.positions();
   Eigen::Vector3d normals[2];
   int found = 0;
-  for (auto f = mesh.vertex_faces.begin(v); f != mesh.vertex_faces.end(v); ++f) {
-    const Triangle& t = mesh.triangles[*f];
+  for (const std::uint32_t f : mesh.faces_around(v)) {
+    const Triangle& t = mesh.triangles()[f];
     if (corner_of(t, w) < 0) continue;
     if (found < 2) normals[found] = (P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]);
     ++found;
@@ -77,11 +77,11 @@ SignedCreaseEdges signed_crease_edges(const PreparedMesh& mesh, std::int8_t sign
   SignedCreaseEdges edges;
   edges.offsets.assign(n + 1, 0);
   for (std::uint32_t v = 0; v < n; ++v) {
-    for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k)
-      if (mesh.curvature.crease[k] == sign) edges.entries.push_back(k);
+    for (auto k = mesh.neighbor_offsets()[v]; k < mesh.neighbor_offsets()[v + 1]; ++k)
+      if (mesh.curvature().crease[k] == sign) edges.entries.push_back(k);
     edges.offsets[v + 1] = std::uint32_t(edges.entries.size());
     std::sort(edges.entries.begin() + edges.offsets[v], edges.entries.end(),
-              [&](std::uint32_t a, std::uint32_t b) { return mesh.neighbors[a] < mesh.neighbors[b]; });
+              [&](std::uint32_t a, std::uint32_t b) { return mesh.neighbors()[a] < mesh.neighbors()[b]; });
   }
   return edges;
 }
@@ -91,7 +91,7 @@ SignedCreaseEdges signed_crease_edges(const PreparedMesh& mesh, std::int8_t sign
 // chains returned only).
 void walk_crease_chains(const PreparedMesh& mesh, FeatureSign sign, double corner_radians,
                         std::vector<CreaseChainSeed>& chains, FeatureSeedStatistics& stats, const Cancellation* cancel) {
-  const auto& P = mesh.positions;
+  const auto& P = mesh.positions();
   const std::size_t n = mesh.n_vertices();
   const SignedCreaseEdges edges = signed_crease_edges(mesh, std::int8_t(crease_sign_value(sign)));
   if (edges.entries.empty()) return;
@@ -104,13 +104,13 @@ void walk_crease_chains(const PreparedMesh& mesh, FeatureSign sign, double corne
       stats.junctions += degree > 2;
       continue;
     }
-    const auto a = mesh.neighbors[edges.entries[edges.offsets[v]]], b = mesh.neighbors[edges.entries[edges.offsets[v] + 1]];
+    const auto a = mesh.neighbors()[edges.entries[edges.offsets[v]]], b = mesh.neighbors()[edges.entries[edges.offsets[v] + 1]];
     if (angle_between(P[v] - P[a], P[b] - P[v]) > corner_radians) split[v] = 1, ++stats.corners;
   }
-  std::vector<char> used(mesh.neighbors.size(), 0);
+  std::vector<char> used(mesh.neighbors().size(), 0);
   auto mark_used = [&](std::uint32_t v, std::uint32_t k) {
     used[k] = 1;
-    const auto twin = entry_of(mesh, mesh.neighbors[k], v);
+    const auto twin = entry_of(mesh, mesh.neighbors()[k], v);
     if (twin != kNoIndex) used[twin] = 1;
   };
   // From `start` along entry k until a split vertex or back at `start`; every step uses an
@@ -122,8 +122,8 @@ void walk_crease_chains(const PreparedMesh& mesh, FeatureSign sign, double corne
     std::uint32_t current = start;
     while (true) {
       mark_used(current, k);
-      const auto next = mesh.neighbors[k];
-      chain.length += mesh.neighbor_edge_lengths[k];
+      const auto next = mesh.neighbors()[k];
+      chain.length += mesh.neighbor_edge_lengths()[k];
       if (next == start) {
         chain.closed = true;
         break;
@@ -155,7 +155,7 @@ double length_weighted_dihedral_degrees(const PreparedMesh& mesh, const CreaseCh
   const std::size_t m = chain.vertices.size();
   for (std::size_t i = 0; i < chain.edges(); ++i) {
     const auto a = chain.vertices[i], b = chain.vertices[(i + 1) % m];
-    const double length = (mesh.positions[b] - mesh.positions[a]).norm();
+    const double length = (mesh.positions()[b] - mesh.positions()[a]).norm();
     sum += length * dihedral_angle(mesh, a, b);
     weight += length;
   }
@@ -171,11 +171,11 @@ void two_rings_off_creases(const PreparedMesh& mesh, std::uint32_t v, std::vecto
   for (int ring = 0; ring < 2; ++ring) {
     next.clear();
     for (auto u : frontier)
-      for (auto k = mesh.neighbor_offsets[u]; k < mesh.neighbor_offsets[u + 1]; ++k) {
-        const auto w = mesh.neighbors[k];
+      for (auto k = mesh.neighbor_offsets()[u]; k < mesh.neighbor_offsets()[u + 1]; ++k) {
+        const auto w = mesh.neighbors()[k];
         if (std::find(visited.begin(), visited.end(), w) != visited.end()) continue;
         visited.push_back(w);
-        if (mesh.curvature.on_crease[w]) continue;
+        if (mesh.curvature().on_crease[w]) continue;
         hood.push_back(w);
         next.push_back(w);
       }
@@ -198,9 +198,9 @@ struct FieldFit {
 };
 
 std::optional<FieldFit> fit_field(const PreparedMesh& mesh, std::uint32_t v, double sign) {
-  const auto& P = mesh.positions;
-  const Eigen::Vector3d normal = mesh.vertex_normals[v];
-  const double h = local_edge_length(mesh, v);
+  const auto& P = mesh.positions();
+  const Eigen::Vector3d normal = mesh.vertex_normals()[v];
+  const double h = mesh.local_edge_length(v);
   if (!(normal.squaredNorm() > 0) || !(h > 0)) return std::nullopt;
   std::vector<std::uint32_t> hood;
   two_rings_off_creases(mesh, v, hood);
@@ -214,7 +214,7 @@ std::optional<FieldFit> fit_field(const PreparedMesh& mesh, std::uint32_t v, dou
     const Eigen::Vector3d d = (P[hood[i]] - P[v]) / h;
     const double x = d.dot(fit.u), y = d.dot(fit.w);
     fit.A.row(Eigen::Index(i)) << 1, x, y, 0.5 * x * x, x * y, 0.5 * y * y;
-    fit.values[Eigen::Index(i)] = feature_value(mesh.curvature, hood[i], sign);
+    fit.values[Eigen::Index(i)] = feature_value(mesh.curvature(), hood[i], sign);
   }
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(fit.A);
   if (qr.rank() < 6) return std::nullopt;
@@ -274,12 +274,12 @@ std::vector<char> near_creases_or_boundary(const PreparedMesh& mesh, int rings) 
   std::vector<char> near(n, 0);
   std::vector<std::uint32_t> frontier, next;
   for (std::uint32_t v = 0; v < n; ++v)
-    if (mesh.curvature.on_crease[v] || mesh.boundary_vertex[v]) near[v] = 1, frontier.push_back(v);
+    if (mesh.curvature().on_crease[v] || mesh.boundary_vertex()[v]) near[v] = 1, frontier.push_back(v);
   for (int ring = 0; ring < rings && !frontier.empty(); ++ring) {
     next.clear();
     for (auto u : frontier)
-      for (auto k = mesh.neighbor_offsets[u]; k < mesh.neighbor_offsets[u + 1]; ++k)
-        if (!near[mesh.neighbors[k]]) near[mesh.neighbors[k]] = 1, next.push_back(mesh.neighbors[k]);
+      for (auto k = mesh.neighbor_offsets()[u]; k < mesh.neighbor_offsets()[u + 1]; ++k)
+        if (!near[mesh.neighbors()[k]]) near[mesh.neighbors()[k]] = 1, next.push_back(mesh.neighbors()[k]);
     frontier.swap(next);
   }
   return near;
@@ -292,7 +292,7 @@ std::vector<FeatureVertexSeed> find_vertex_seeds(const PreparedMesh& mesh, Featu
                                                  std::size_t& candidate_count, const Cancellation* cancel) {
   std::vector<FeatureVertexSeed> seeds;
   if (options.max_vertices_per_sign == 0) return seeds;
-  const CurvatureField& field = mesh.curvature;
+  const CurvatureField& field = mesh.curvature();
   const double s = crease_sign_value(sign);
   const double radius = field.radius > 0 ? field.radius : 1.0;
   // The noise floor k >= 2 m sigma / (R^2 h) (see FeatureSeedOptions::min_signal_to_noise), as
@@ -300,11 +300,11 @@ std::vector<FeatureVertexSeed> find_vertex_seeds(const PreparedMesh& mesh, Featu
   const double floor_times_h = 2 * options.min_signal_to_noise * field.noise / (radius * radius);
   std::vector<std::pair<double, std::uint32_t>> candidates;  // (strength, vertex)
   for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
-    if (mesh.component[v] < 0 || excluded[v]) continue;
+    if (mesh.component()[v] < 0 || excluded[v]) continue;
     const double value = feature_value(field, v, s);
-    const double strength = value / mesh.curvature_scale;
+    const double strength = value / mesh.curvature_scale();
     if (!(value > 0) || !(strength >= options.min_strength)) continue;
-    if (floor_times_h > 0 && !(value * local_edge_length(mesh, v) >= floor_times_h)) continue;
+    if (floor_times_h > 0 && !(value * mesh.local_edge_length(v) >= floor_times_h)) continue;
     candidates.emplace_back(strength, v);
   }
   candidate_count = candidates.size();
@@ -316,7 +316,7 @@ std::vector<FeatureVertexSeed> find_vertex_seeds(const PreparedMesh& mesh, Featu
     const auto [strength, v] = candidates[i];
     bool suppressed = false;
     for (std::size_t j = 0; j < seeds.size() && !suppressed; ++j)
-      suppressed = (mesh.positions[v] - mesh.positions[seeds[j].vertex]).norm() < suppression_radius[j];
+      suppressed = (mesh.positions()[v] - mesh.positions()[seeds[j].vertex]).norm() < suppression_radius[j];
     if (suppressed) continue;
     const CrestTest crest = test_crest(mesh, v, s);
     if (!crest.on_crest) continue;
@@ -327,7 +327,7 @@ std::vector<FeatureVertexSeed> find_vertex_seeds(const PreparedMesh& mesh, Featu
     seed.strength = strength;
     seed.direction = crest.direction;
     seeds.push_back(seed);
-    suppression_radius.push_back(options.spacing * local_edge_length(mesh, v));
+    suppression_radius.push_back(options.spacing * mesh.local_edge_length(v));
   }
   return seeds;
 }
@@ -362,9 +362,9 @@ FeatureSeeds find_feature_seeds(const PreparedMesh& mesh, const FeatureSeedOptio
   const std::vector<char> excluded = near_creases_or_boundary(mesh, options.crease_clearance);
   seeds.ridge_vertices = find_vertex_seeds(mesh, FeatureSign::ridge, options, excluded, stats.ridge_candidates, cancel);
   seeds.valley_vertices = find_vertex_seeds(mesh, FeatureSign::valley, options, excluded, stats.valley_candidates, cancel);
-  const double radius = mesh.curvature.radius > 0 ? mesh.curvature.radius : 1.0;
-  stats.noise_floor_strength = 2 * options.min_signal_to_noise * mesh.curvature.noise /
-                               (radius * radius * mesh.statistics.mean_edge_length) / mesh.curvature_scale;
+  const double radius = mesh.curvature().radius > 0 ? mesh.curvature().radius : 1.0;
+  stats.noise_floor_strength = 2 * options.min_signal_to_noise * mesh.curvature().noise /
+                               (radius * radius * mesh.statistics().mean_edge_length) / mesh.curvature_scale();
   stats.elapsed_ms = lap_ms(clock);
   return seeds;
 }

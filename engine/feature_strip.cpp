@@ -23,8 +23,8 @@ double corner_angle(const Eigen::Vector3d& at, const Eigen::Vector3d& a, const E
 // runs from center to next, or kNoIndex where the edge center-next is on the boundary (seen
 // from that side).
 std::uint32_t next_around(const PreparedMesh& pm, std::uint32_t center, std::uint32_t next) {
-  for (auto it = pm.vertex_faces.begin(center); it != pm.vertex_faces.end(center); ++it) {
-    const auto& t = pm.triangles[*it];
+  for (const std::uint32_t f : pm.faces_around(center)) {
+    const auto& t = pm.triangles()[f];
     const int c = corner_of(t, center);
     if (t[(c + 1) % 3] == next) return t[(c + 2) % 3];
   }
@@ -41,7 +41,7 @@ double swept_angle(const PreparedMesh& pm, std::uint32_t center, std::uint32_t f
   for (std::size_t guard = 0; guard < 1024; ++guard) {
     const std::uint32_t next = next_around(pm, center, spoke);
     if (next == kNoIndex) return -1;
-    sum += corner_angle(pm.positions[center], pm.positions[spoke], pm.positions[next]);
+    sum += corner_angle(pm.positions()[center], pm.positions()[spoke], pm.positions()[next]);
     spoke = next;
     if (spoke == until) return sum;
   }
@@ -51,7 +51,7 @@ double swept_angle(const PreparedMesh& pm, std::uint32_t center, std::uint32_t f
 }  // namespace
 
 std::vector<Eigen::Vector2d> embed_line(const PreparedMesh& pm, const std::vector<std::uint32_t>& line) {
-  const auto& P = pm.positions;
+  const auto& P = pm.positions();
   std::vector<Eigen::Vector2d> p(line.size());
   if (line.empty()) return p;
   p[0] = Eigen::Vector2d::Zero();
@@ -121,24 +121,24 @@ FeatureStrip extract_feature_strip(const PreparedMesh& pm, const std::vector<std
     const std::size_t ring_end = strip.vertices.size();
     for (std::size_t i = ring_begin; i < ring_end; ++i) {
       const auto v = strip.vertices[i];
-      for (auto k = pm.neighbor_offsets[v]; k < pm.neighbor_offsets[v + 1]; ++k)
-        add_vertex(pm.neighbors[k], ring, strip.line_position[i]);
+      for (auto k = pm.neighbor_offsets()[v]; k < pm.neighbor_offsets()[v + 1]; ++k)
+        add_vertex(pm.neighbors()[k], ring, strip.line_position[i]);
     }
     ring_begin = ring_end;
   }
   // Faces: every face of a vertex in rings < k whose three corners are in the strip.
   StampedMap& local_face = stamped_map(1);  // mesh face -> local triangle (here: seen)
-  local_face.begin(pm.triangles.size());
+  local_face.begin(pm.triangles().size());
   std::vector<std::uint32_t> faces;
   for (std::size_t i = 0; i < strip.vertices.size(); ++i) {
     if (strip.ring[i] >= strip.rings) continue;
-    for (auto f = pm.vertex_faces.begin(strip.vertices[i]); f != pm.vertex_faces.end(strip.vertices[i]); ++f)
-      if (!local_face.contains(*f)) local_face.set(*f, 0), faces.push_back(*f);
+    for (const std::uint32_t f : pm.faces_around(strip.vertices[i]))
+      if (!local_face.contains(f)) local_face.set(f, 0), faces.push_back(f);
   }
   std::sort(faces.begin(), faces.end());  // the strip's triangles in mesh order, as always
   double edge_sum = 0;
   for (auto f : faces) {
-    const auto& t = pm.triangles[f];
+    const auto& t = pm.triangles()[f];
     std::array<std::uint32_t, 3> corners{};
     bool inside = true;
     for (int k = 0; k < 3 && inside; ++k) {
@@ -148,20 +148,20 @@ FeatureStrip extract_feature_strip(const PreparedMesh& pm, const std::vector<std
     if (!inside) continue;
     strip.triangles.push_back(corners);
     strip.faces.push_back(f);
-    for (int k = 0; k < 3; ++k) edge_sum += (pm.positions[t[k]] - pm.positions[t[(k + 1) % 3]]).norm();
+    for (int k = 0; k < 3; ++k) edge_sum += (pm.positions()[t[k]] - pm.positions()[t[(k + 1) % 3]]).norm();
   }
-  strip.mean_edge_length = strip.triangles.empty() ? pm.statistics.mean_edge_length
+  strip.mean_edge_length = strip.triangles.empty() ? pm.statistics().mean_edge_length
                                                    : edge_sum / (3.0 * double(strip.triangles.size()));
 
   // Triangle adjacency inside the strip, for walking point location: the mesh's face table
   // (built once in prepare_mesh) restricted to the strip.
-  local_face.begin(pm.triangles.size());
+  local_face.begin(pm.triangles().size());
   for (std::uint32_t t = 0; t < strip.faces.size(); ++t) local_face.set(strip.faces[t], t);
   strip.triangle_neighbors.assign(strip.triangles.size(), {-1, -1, -1});
   for (std::uint32_t t = 0; t < strip.triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) {
       // The edge opposite corner k is edge (k + 1) of the face in the mesh table's numbering.
-      const auto across = pm.face_neighbors[strip.faces[t]][(k + 1) % 3];
+      const auto across = pm.face_neighbors()[strip.faces[t]][(k + 1) % 3];
       if (across != kNoIndex && local_face.contains(across)) strip.triangle_neighbors[t][k] = std::int32_t(local_face.at(across));
     }
   return strip;
@@ -195,8 +195,8 @@ void place_by_similar_triangles(const PreparedMesh& pm, const FeatureStrip& stri
       // Corners in the triangle's (counter-clockwise) order: a -> b is the placed edge and the
       // apex c lies on its left.
       const auto a = t[(apex + 1) % 3], b = t[(apex + 2) % 3], c = t[apex];
-      const Eigen::Vector3d A = pm.positions[strip.vertices[a]], B = pm.positions[strip.vertices[b]],
-                            C = pm.positions[strip.vertices[c]];
+      const Eigen::Vector3d A = pm.positions()[strip.vertices[a]], B = pm.positions()[strip.vertices[b]],
+                            C = pm.positions()[strip.vertices[c]];
       const Eigen::Vector3d ab = B - A;
       const double ab_len = ab.norm();
       const Eigen::Vector2d pab = flat.uv[b] - flat.uv[a];
@@ -272,7 +272,7 @@ bool place_conformally(const PreparedMesh& pm, const FeatureStrip& strip, FlatSt
   for (std::size_t i = 0; i < strip.line.size(); ++i) line_mesh[i] = strip.vertices[strip.line[i]];
   const auto line_uv = embed_line(pm, line_mesh);
   for (std::size_t i = 0; i < strip.line.size(); ++i) flat.uv[strip.line[i]] = line_uv[i];
-  const auto position = [&](std::uint32_t v) { return pm.positions[strip.vertices[v]]; };
+  const auto position = [&](std::uint32_t v) { return pm.positions()[strip.vertices[v]]; };
 
   // Unknowns: w = u + iv of each free vertex, one complex number. A triangle's residual is
   // sum_k c_k w_k with c_k = W_k / sqrt(area); its pinned corners go to the right-hand side b.
@@ -347,7 +347,7 @@ void mark_valid_triangles(const PreparedMesh& pm, const FeatureStrip& strip, con
     if (signed_area > 0) {
       double distortion = 0;
       for (int k = 0; k < 3; ++k) {
-        const double length3 = (pm.positions[strip.vertices[t[k]]] - pm.positions[strip.vertices[t[(k + 1) % 3]]]).norm();
+        const double length3 = (pm.positions()[strip.vertices[t[k]]] - pm.positions()[strip.vertices[t[(k + 1) % 3]]]).norm();
         const double length2 = (flat.uv[t[k]] - flat.uv[t[(k + 1) % 3]]).norm();
         if (length3 > 0) distortion = std::max(distortion, std::abs(length2 / length3 - 1));
       }

@@ -62,7 +62,7 @@ struct Station {
 };
 
 std::uint32_t nearest_corner(const PreparedMesh& pm, const SurfacePoint& s) {
-  const auto& t = pm.triangles[s.face];
+  const auto& t = pm.triangles()[s.face];
   const int k = int(std::max_element(s.barycentric.begin(), s.barycentric.end()) - s.barycentric.begin());
   return t[std::size_t(k)];
 }
@@ -81,7 +81,7 @@ std::vector<Station> stations_along(const PreparedMesh& pm, const FittedCurveLin
   unit = line.edge_length;
   if (!(unit > 0)) {
     unit = 0;
-    for (const auto& q : line.points) unit += local_edge_length(pm, nearest_corner(pm, q));
+    for (const auto& q : line.points) unit += pm.local_edge_length(nearest_corner(pm, q));
     unit /= double(line.points.size());
   }
   const double spacing = kStationSpacing * unit;
@@ -98,7 +98,7 @@ std::vector<Station> stations_along(const PreparedMesh& pm, const FittedCurveLin
     st.p = (1 - f) * path[segment].position + f * path[segment + 1].position;
     st.u = u;
     st.seed = nearest_corner(pm, path[f < 0.5 ? segment : segment + 1]);
-    st.edge = std::min(local_edge_length(pm, st.seed), unit);
+    st.edge = std::min(pm.local_edge_length(st.seed), unit);
     st.exact = exact[segment] && exact[segment + 1];
   }
   return stations;
@@ -116,11 +116,11 @@ class Neighbourhood {
     seen_.set(seed, 0);
     for (std::size_t head = 0; head < found_.size(); ++head) {
       const std::uint32_t v = found_[head];
-      for (auto k = pm.neighbor_offsets[v]; k < pm.neighbor_offsets[v + 1]; ++k) {
-        const std::uint32_t w = pm.neighbors[k];
+      for (auto k = pm.neighbor_offsets()[v]; k < pm.neighbor_offsets()[v + 1]; ++k) {
+        const std::uint32_t w = pm.neighbors()[k];
         if (seen_.contains(w)) continue;
         seen_.set(w, 0);
-        if ((pm.positions[w] - centre).norm() <= radius) found_.push_back(w);
+        if ((pm.positions()[w] - centre).norm() <= radius) found_.push_back(w);
       }
     }
     return found_;
@@ -344,9 +344,9 @@ std::optional<Eigen::Vector3d> surface_point(const Patch& patch, const Eigen::Ve
 bool marked_crease_near(const PreparedMesh& pm, const Neighbourhood& ball, const std::vector<std::uint32_t>& vertices,
                         const Eigen::Vector3d& p, double radius, double sign) {
   for (const std::uint32_t v : vertices) {
-    if ((pm.positions[v] - p).norm() > radius) continue;
-    for (auto k = pm.neighbor_offsets[v]; k < pm.neighbor_offsets[v + 1]; ++k) {
-      if (pm.is_crease_slot(k, sign) && ball.contains(pm.neighbors[k])) return true;
+    if ((pm.positions()[v] - p).norm() > radius) continue;
+    for (auto k = pm.neighbor_offsets()[v]; k < pm.neighbor_offsets()[v + 1]; ++k) {
+      if (pm.is_crease_slot(k, sign) && ball.contains(pm.neighbors()[k])) return true;
     }
   }
   return false;
@@ -368,12 +368,12 @@ Patch make_patch(const PreparedMesh& pm, const std::vector<std::uint32_t>& verti
   const double sigma = radius / 2;
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   for (const std::uint32_t v : vertices) {
-    const double d = (pm.positions[v] - st[i].p).norm();
-    patch.x.push_back(pm.positions[v]);
+    const double d = (pm.positions()[v] - st[i].p).norm();
+    patch.x.push_back(pm.positions()[v]);
     patch.gauss.push_back(std::exp(-0.5 * d * d / (sigma * sigma)));
-    normal += patch.gauss.back() * pm.vertex_normals[v];
+    normal += patch.gauss.back() * pm.vertex_normals()[v];
   }
-  if (!(normal.norm() > 1e-12)) normal = pm.vertex_normals[st[i].seed];
+  if (!(normal.norm() > 1e-12)) normal = pm.vertex_normals()[st[i].seed];
   patch.frame.normal = normal.normalized();
   Eigen::Vector3d along = line_direction(st, i, closed);
   along -= along.dot(patch.frame.normal) * patch.frame.normal;
@@ -413,7 +413,7 @@ std::pair<Eigen::Vector3d, Source> station_point(const PreparedMesh& pm, Neighbo
   const bool two_sides = crease_residual < (marked ? 1.0 : kCreaseResidualShare) * surface_residual;
   // ... and where two planes describe the sides down to the noise: a tight bend of the crease
   // within the radius, or a third face near a corner, leaves residuals the fit cannot explain.
-  const double noise = std::max(pm.curvature.noise, kCleanNoise) * station.edge;
+  const double noise = std::max(pm.curvature().noise, kCleanNoise) * station.edge;
   const bool described = crease_residual <= kResidualPerNoise * noise;
   if (crease && (station.p - *crease).norm() <= max_shift && two_sides && described)
     return {blend_with_line(*crease, station.p, noise), Source::crease};

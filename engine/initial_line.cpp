@@ -41,7 +41,7 @@ double keys_feature_sign(const PreparedMesh& mesh, const std::vector<std::uint32
   if (!options.sign_aware) return 0;
   int positive = 0, negative = 0;
   for (auto k : keys) {
-    const double h = dominant_curvature(mesh.curvature, k) / mesh.curvature_scale;
+    const double h = dominant_curvature(mesh.curvature(), k) / mesh.curvature_scale();
     if (h > 0.05) ++positive;
     if (h < -0.05) ++negative;
   }
@@ -52,8 +52,8 @@ double keys_feature_sign(const PreparedMesh& mesh, const std::vector<std::uint32
 
 double path_length(const PreparedMesh& mesh, const std::vector<std::uint32_t>& path, bool closed) {
   double length = 0;
-  for (std::size_t i = 1; i < path.size(); ++i) length += (mesh.positions[path[i]] - mesh.positions[path[i - 1]]).norm();
-  if (closed && path.size() > 2) length += (mesh.positions[path.front()] - mesh.positions[path.back()]).norm();
+  for (std::size_t i = 1; i < path.size(); ++i) length += (mesh.positions()[path[i]] - mesh.positions()[path[i - 1]]).norm();
+  if (closed && path.size() > 2) length += (mesh.positions()[path.front()] - mesh.positions()[path.back()]).norm();
   return length;
 }
 
@@ -64,7 +64,7 @@ double path_length(const PreparedMesh& mesh, const std::vector<std::uint32_t>& p
 // are any, else drops the chords when anything else is left.
 void keep_crease_candidates(const PreparedMesh& mesh, std::uint32_t current, std::uint32_t goal,
                             std::vector<std::uint32_t>& candidates) {
-  const auto& on_crease = mesh.curvature.on_crease;
+  const auto& on_crease = mesh.curvature().on_crease;
   if (on_crease.empty() || !on_crease[current] || !on_crease[goal]) return;
   std::vector<std::uint32_t> creases, others;
   for (auto v : candidates) {
@@ -82,12 +82,12 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
     if (failure != nullptr) *failure = std::move(why);
     return std::nullopt;
   };
-  const auto& P = mesh.positions;
+  const auto& P = mesh.positions();
   const Eigen::Vector3d start_to_end = P[to] - P[from];  // V_{s,e}
   // Lengths near the keys, not the mesh's mean edge: a fine part beside a coarse one would
   // otherwise allow too few steps and call every edge near the end "within two edges".
-  const double edge = local_edge_length(mesh, to);
-  const double finest = std::min(edge, local_edge_length(mesh, from));
+  const double edge = mesh.local_edge_length(to);
+  const double finest = std::min(edge, mesh.local_edge_length(from));
   // Termination guard: a sensible line is at most a few times the straight distance (in edges).
   const std::size_t max_steps =
       std::min<std::size_t>(mesh.n_vertices(), std::size_t(8.0 * start_to_end.norm() / finest) + 64);
@@ -100,15 +100,15 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
   std::vector<double> angle_to_goal, angle_to_previous, distance, curvature_badness;
   std::vector<double> f_o1, f_o2, f_d, f_c;
   double closest = start_to_end.norm();
-  auto C = [&](std::uint32_t v) { return dominant_curvature(mesh.curvature, v); };
+  auto C = [&](std::uint32_t v) { return dominant_curvature(mesh.curvature(), v); };
   const double goal_curvature = C(to);
 
   while (true) {
     const std::uint32_t current = path.back();
-    const std::uint32_t begin = mesh.neighbor_offsets[current], end = mesh.neighbor_offsets[current + 1];
+    const std::uint32_t begin = mesh.neighbor_offsets()[current], end = mesh.neighbor_offsets()[current + 1];
     // Step 3: if v_e is in V_a it is v_suc and the search ends.
     for (auto k = begin; k < end; ++k)
-      if (mesh.neighbors[k] == to) {
+      if (mesh.neighbors()[k] == to) {
         path.push_back(to);
         return path;
       }
@@ -117,7 +117,7 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
       return fail("marching did not reach the end key within " + std::to_string(max_steps) + " steps");
     candidates.clear();
     for (auto k = begin; k < end; ++k) {
-      const auto v = mesh.neighbors[k];
+      const auto v = mesh.neighbors()[k];
       if (!seen.seen(v) && !is_blocked(blocked, v)) candidates.push_back(v);
     }
     if (candidates.empty()) return fail("marching ran into a dead end (every neighbour already visited)");
@@ -187,7 +187,7 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
     FeaturePathCost cost(mesh, options, feature_sign);
     path = cheapest_path_between(mesh, from, to, cost, blocked, cost.floor(), max_cost, cancel);
   } else {
-    const auto length = [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths[k]; };
+    const auto length = [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths()[k]; };
     path = cheapest_path_between(mesh, from, to, length, blocked, 1.0, max_cost, cancel);
   }
   if (path.empty()) return std::nullopt;
@@ -203,9 +203,9 @@ InitialLineResult find_initial_line(const PreparedMesh& mesh, const std::vector<
     if (keys[i] >= mesh.n_vertices())
       throw InvalidInputError("key " + std::to_string(i) + " is vertex " + std::to_string(keys[i]) +
                               ", but the mesh has only " + std::to_string(mesh.n_vertices()) + " vertices");
-    if (mesh.component[keys[i]] < 0)
+    if (mesh.component()[keys[i]] < 0)
       throw GeometryError("key " + std::to_string(i) + " (vertex " + std::to_string(keys[i]) + ") belongs to no triangle");
-    if (mesh.component[keys[i]] != mesh.component[keys[0]])
+    if (mesh.component()[keys[i]] != mesh.component()[keys[0]])
       throw GeometryError("keys 0 and " + std::to_string(i) + " (vertices " + std::to_string(keys[0]) + " and " +
                           std::to_string(keys[i]) + ") lie on different connected components of the mesh");
   }

@@ -93,7 +93,7 @@ std::optional<std::vector<std::uint32_t>> marching_search(const PreparedMesh& me
                                                           const std::vector<std::uint32_t>* blocked = nullptr,
                                                           const Cancellation* cancel = nullptr);
 
-/// The feature path's cost of the edge from v to mesh.neighbors[k]: its length times
+/// The feature path's cost of the edge from v to mesh.neighbors()[k]: its length times
 /// floor + (1 - floor)(1 - strength), strength the mean feature strength of its ends, 1 on a
 /// crease of the line's sign, 0 on a chord between crease vertices. Never below floor times the
 /// length. Not thread-safe (it remembers the last v's strength).
@@ -121,25 +121,19 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
                                                              const Cancellation* cancel = nullptr,
                                                              double max_cost = HUGE_VAL);
 
-/// Feature strength in [0, 1] of vertex v: its feature value for lines of `feature_sign`
-/// (engine/curvature.h) over the mesh's curvature scale, clamped.
-inline double feature_strength(const PreparedMesh& mesh, std::uint32_t v, double feature_sign) {
-  const double s = feature_value(mesh.curvature, v, feature_sign) / mesh.curvature_scale;
-  return s > 1 ? 1 : s;
-}
 
 inline double FeaturePathCost::operator()(std::uint32_t v, std::uint32_t k) {
-  const auto w = mesh_.neighbors[k];
-  if (strength_of_ != v) strength_of_ = v, strength_v_ = feature_strength(mesh_, v, sign_);
+  const auto w = mesh_.neighbors()[k];
+  if (strength_of_ != v) strength_of_ = v, strength_v_ = mesh_.feature_strength(v, sign_);
   // A crease edge of the line's kind is a feature whatever its ends' curvature says
   // (on skinny CAD triangles the vertex fields are unreliable, a dihedral angle is not).
-  const auto crease = mesh_.curvature.crease[k];
+  const auto crease = mesh_.curvature().crease[k];
   const bool on_crease = crease != 0 && (sign_ == 0 || crease == sign_);
   // An edge joining two crease vertices without being a crease is a chord across a
   // face (a CAD cap's long diagonal cutting a rounded corner): no feature at all.
-  const bool chord = !on_crease && mesh_.curvature.on_crease[v] && mesh_.curvature.on_crease[w];
-  const double strength = on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v_ + feature_strength(mesh_, w, sign_));
-  return mesh_.neighbor_edge_lengths[k] * (floor_ + (1 - floor_) * (1 - strength));
+  const bool chord = !on_crease && mesh_.curvature().on_crease[v] && mesh_.curvature().on_crease[w];
+  const double strength = on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v_ + mesh_.feature_strength(w, sign_));
+  return mesh_.neighbor_edge_lengths()[k] * (floor_ + (1 - floor_) * (1 - strength));
 }
 
 /// +1 when every key sits on a ridge (H above 5% of the curvature scale), -1 when every key sits

@@ -106,7 +106,7 @@ void check_prepared_bound(const TriMesh& mesh, std::size_t max_bytes) {
                              " triangles so far), more than the " + std::to_string(max_bytes >> 20) + " MiB it may use");
 }
 
-void warn_dropped_faces(PreparedMesh& pm, std::size_t first_dropped, std::size_t first_repeated, std::size_t split_faces) {
+void warn_dropped_faces(PreparedTables& pm, std::size_t first_dropped, std::size_t first_repeated, std::size_t split_faces) {
   const MeshStatistics& stats = pm.statistics;
   if (stats.dropped_faces > 0) {
     std::ostringstream msg;
@@ -136,7 +136,7 @@ void warn_dropped_faces(PreparedMesh& pm, std::size_t first_dropped, std::size_t
 // a triangle already added are dropped (a repeat would take three vertex copies each: one
 // triangle repeated 8 million times had made 24 million vertices); all are reported in
 // pm.warnings. The memory bound is checked before the first face and every 4096 faces.
-void add_triangles(const RawMesh& raw, TriMesh& mesh, PreparedMesh& pm, std::size_t max_bytes,
+void add_triangles(const RawMesh& raw, TriMesh& mesh, PreparedTables& pm, std::size_t max_bytes,
                    const Cancellation* cancel) {
   MeshStatistics& stats = pm.statistics;
   if (max_bytes != 0 && preparation_bytes_lower_bound(raw.positions.size(), 0) > max_bytes)
@@ -189,7 +189,7 @@ void add_triangles(const RawMesh& raw, TriMesh& mesh, PreparedMesh& pm, std::siz
 
 // Vertex adjacency in compressed rows with edge lengths beside it; the mean edge length and
 // the boundary edge count.
-void build_vertex_adjacency(const TriMesh& mesh, PreparedMesh& pm) {
+void build_vertex_adjacency(const TriMesh& mesh, PreparedTables& pm) {
   const std::size_t n = mesh.n_vertices();
   pm.neighbor_offsets.assign(n + 1, 0);
   for (auto v : mesh.vertices()) pm.neighbor_offsets[v.idx() + 1] = pm.neighbor_offsets[v.idx()] + mesh.valence(v);
@@ -214,7 +214,7 @@ void build_vertex_adjacency(const TriMesh& mesh, PreparedMesh& pm) {
 
 // The first face of OpenMesh's circulation around each vertex (not the lowest face id): the
 // face answers have always reported for points on vertices.
-void record_vertex_faces(const TriMesh& mesh, PreparedMesh& pm) {
+void record_vertex_faces(const TriMesh& mesh, PreparedTables& pm) {
   pm.vertex_face.assign(mesh.n_vertices(), UINT32_MAX);
   for (auto v : mesh.vertices()) {
     const auto faces = mesh.vf_range(v);
@@ -223,7 +223,7 @@ void record_vertex_faces(const TriMesh& mesh, PreparedMesh& pm) {
 }
 
 // Components by breadth-first search over the adjacency; unreferenced vertices get -1.
-void label_components(PreparedMesh& pm) {
+void label_components(PreparedTables& pm) {
   const std::size_t n = pm.positions.size();
   MeshStatistics& stats = pm.statistics;
   pm.component.assign(n, -1);
@@ -247,7 +247,7 @@ void label_components(PreparedMesh& pm) {
 
 // Boundary loops (following next_halfedge around each unvisited boundary halfedge) and the
 // bounding box of the referenced vertices.
-void measure_boundary_and_box(const TriMesh& mesh, PreparedMesh& pm) {
+void measure_boundary_and_box(const TriMesh& mesh, PreparedTables& pm) {
   MeshStatistics& stats = pm.statistics;
   std::vector<char> seen(mesh.n_halfedges(), 0);
   for (auto h : mesh.halfedges()) {
@@ -274,7 +274,7 @@ void measure_boundary_and_box(const TriMesh& mesh, PreparedMesh& pm) {
 // swap to match); either way a warning says so.
 constexpr double kFlatShell = 1e-3;
 
-void orient_closed_components(PreparedMesh& pm, bool outward) {
+void orient_closed_components(PreparedTables& pm, bool outward) {
   MeshStatistics& stats = pm.statistics;
   std::vector<char> open(stats.components, 0);
   std::vector<double> volume(stats.components, 0), magnitude(stats.components, 0);
@@ -312,7 +312,7 @@ void orient_closed_components(PreparedMesh& pm, bool outward) {
 }
 
 // The face tables every request reads (built once here).
-void build_face_tables(PreparedMesh& pm) {
+void build_face_tables(PreparedTables& pm) {
   const std::size_t n = pm.positions.size();
   pm.vertex_faces = build_vertex_faces(pm.triangles, n);
   pm.face_neighbors = build_face_neighbors(pm.triangles, n);
@@ -323,7 +323,7 @@ void build_face_tables(PreparedMesh& pm) {
 }
 
 // Curvature range and percentiles of the feature value; the curvature scale.
-void measure_curvature(PreparedMesh& pm) {
+void measure_curvature(PreparedTables& pm) {
   MeshStatistics& stats = pm.statistics;
   std::vector<double> magnitudes;
   magnitudes.reserve(pm.positions.size());
@@ -390,17 +390,17 @@ std::vector<std::array<std::uint32_t, 3>> build_face_neighbors(const std::vector
 
 std::size_t PreparedMesh::memory_bytes() const {
   std::size_t bytes = sizeof(PreparedMesh);
-  bytes += vertex_face.capacity() * sizeof(std::uint32_t);
-  bytes += source_triangle.capacity() * sizeof(std::uint32_t) + triangles.capacity() * 3 * sizeof(std::uint32_t);
-  bytes += positions.capacity() * sizeof(Eigen::Vector3d) + vertex_normals.capacity() * sizeof(Eigen::Vector3d);
-  bytes += (curvature.mean.capacity() + curvature.k_max.capacity() + curvature.k_min.capacity()) * sizeof(double);
-  bytes += curvature.crease.capacity() + curvature.on_crease.capacity();
-  bytes += neighbor_offsets.capacity() * sizeof(std::uint32_t) + neighbors.capacity() * sizeof(std::uint32_t);
-  bytes += neighbor_edge_lengths.capacity() * sizeof(double) + component.capacity() * sizeof(std::int32_t);
-  bytes += (vertex_faces.offsets.capacity() + vertex_faces.faces.capacity()) * sizeof(std::uint32_t);
-  bytes += face_neighbors.capacity() * 3 * sizeof(std::uint32_t) + boundary_vertex.capacity();
-  bytes += vertex_index.memory_bytes();
-  for (const auto& w : warnings) bytes += w.capacity();
+  bytes += t_.vertex_face.capacity() * sizeof(std::uint32_t);
+  bytes += t_.source_triangle.capacity() * sizeof(std::uint32_t) + t_.triangles.capacity() * 3 * sizeof(std::uint32_t);
+  bytes += t_.positions.capacity() * sizeof(Eigen::Vector3d) + t_.vertex_normals.capacity() * sizeof(Eigen::Vector3d);
+  bytes += (t_.curvature.mean.capacity() + t_.curvature.k_max.capacity() + t_.curvature.k_min.capacity()) * sizeof(double);
+  bytes += t_.curvature.crease.capacity() + t_.curvature.on_crease.capacity();
+  bytes += t_.neighbor_offsets.capacity() * sizeof(std::uint32_t) + t_.neighbors.capacity() * sizeof(std::uint32_t);
+  bytes += t_.neighbor_edge_lengths.capacity() * sizeof(double) + t_.component.capacity() * sizeof(std::int32_t);
+  bytes += (t_.vertex_faces.offsets.capacity() + t_.vertex_faces.faces.capacity()) * sizeof(std::uint32_t);
+  bytes += t_.face_neighbors.capacity() * 3 * sizeof(std::uint32_t) + t_.boundary_vertex.capacity();
+  bytes += t_.vertex_index.memory_bytes();
+  for (const auto& w : t_.warnings) bytes += w.capacity();
   return bytes;
 }
 
@@ -411,8 +411,7 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   // report every such face ourselves, so its stream is switched off once for the process.
   static std::once_flag quiet;
   std::call_once(quiet, [] { omerr().disable(); });
-  auto prepared = std::make_shared<PreparedMesh>();
-  PreparedMesh& pm = *prepared;
+  PreparedTables pm;
   MeshStatistics& stats = pm.statistics;
   pm.warnings = std::move(raw.warnings);
   stats.file_vertices = raw.positions.size();
@@ -482,14 +481,14 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   measure_curvature(pm);
 
   pm.prepare_ms = ms_since(start);
-  return prepared;
+  return std::make_shared<const PreparedMesh>(std::move(pm));
 }
 
-double local_edge_length(const PreparedMesh& mesh, std::uint32_t v) {
-  const auto begin = mesh.neighbor_offsets[v], end = mesh.neighbor_offsets[v + 1];
-  if (begin == end) return mesh.statistics.mean_edge_length;
+double PreparedMesh::local_edge_length(std::uint32_t v) const {
+  const auto begin = t_.neighbor_offsets[v], end = t_.neighbor_offsets[v + 1];
+  if (begin == end) return t_.statistics.mean_edge_length;
   double sum = 0;
-  for (auto k = begin; k < end; ++k) sum += mesh.neighbor_edge_lengths[k];
+  for (auto k = begin; k < end; ++k) sum += t_.neighbor_edge_lengths[k];
   return sum / double(end - begin);
 }
 

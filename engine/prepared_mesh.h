@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "engine/curvature.h"
@@ -89,6 +90,15 @@ struct VertexFaces {
   const std::uint32_t* end(std::uint32_t v) const { return faces.data() + offsets[v + 1]; }
 };
 
+/// A run of ids in one of the prepared mesh's compressed rows, for range-for.
+struct IdRange {
+  const std::uint32_t* first;
+  const std::uint32_t* last;
+  const std::uint32_t* begin() const { return first; }
+  const std::uint32_t* end() const { return last; }
+  std::size_t size() const { return std::size_t(last - first); }
+};
+
 /// The faces around each of n_vertices vertices of `triangles`.
 VertexFaces build_vertex_faces(const std::vector<std::array<std::uint32_t, 3>>& triangles, std::size_t n_vertices);
 
@@ -97,10 +107,10 @@ VertexFaces build_vertex_faces(const std::vector<std::array<std::uint32_t, 3>>& 
 std::vector<std::array<std::uint32_t, 3>> build_face_neighbors(const std::vector<std::array<std::uint32_t, 3>>& triangles,
                                                                std::size_t n_vertices);
 
-/// Everything a request reads, as flat tables: vertex i is input vertex i (copies made for
-/// non-manifold faces follow the input's vertices). OpenMesh builds the topology while the mesh
-/// is prepared and is dropped afterwards.
-struct PreparedMesh {
+/// The tables of a prepared mesh, as prepare_mesh builds them: vertex i is input vertex i (copies
+/// made for non-manifold faces follow the input's vertices). OpenMesh builds the topology while
+/// the mesh is prepared and is dropped afterwards.
+struct PreparedTables {
   /// Input triangle index of each mesh face (faces keep input order; only dropped ones are missing).
   std::vector<std::uint32_t> source_triangle;
   /// Corner vertex ids of each face in the input's corner order, or with its second and third
@@ -140,20 +150,52 @@ struct PreparedMesh {
   std::vector<std::string> warnings;
   double prepare_ms = 0;
   PrepareTimings timings;
+};
 
-  std::size_t n_vertices() const { return positions.size(); }
+/// Everything a request reads: the tables of PreparedTables, immutable once prepared (the server
+/// shares one instance between threads), and the queries the stages ask of them.
+class PreparedMesh {
+ public:
+  explicit PreparedMesh(PreparedTables tables) : t_(std::move(tables)) {}
+
+  // The tables (PreparedTables says what each holds).
+  const std::vector<std::uint32_t>& source_triangle() const { return t_.source_triangle; }
+  const std::vector<std::array<std::uint32_t, 3>>& triangles() const { return t_.triangles; }
+  const std::vector<Eigen::Vector3d>& positions() const { return t_.positions; }
+  const std::vector<Eigen::Vector3d>& vertex_normals() const { return t_.vertex_normals; }
+  const CurvatureField& curvature() const { return t_.curvature; }
+  const std::vector<std::uint32_t>& neighbor_offsets() const { return t_.neighbor_offsets; }
+  const std::vector<std::uint32_t>& neighbors() const { return t_.neighbors; }
+  const std::vector<double>& neighbor_edge_lengths() const { return t_.neighbor_edge_lengths; }
+  const std::vector<std::int32_t>& component() const { return t_.component; }
+  const VertexFaces& vertex_faces() const { return t_.vertex_faces; }
+  const std::vector<std::uint32_t>& vertex_face() const { return t_.vertex_face; }
+  const std::vector<std::array<std::uint32_t, 3>>& face_neighbors() const { return t_.face_neighbors; }
+  const std::vector<char>& boundary_vertex() const { return t_.boundary_vertex; }
+  const VertexIndex& vertex_index() const { return t_.vertex_index; }
+  double curvature_scale() const { return t_.curvature_scale; }
+  const MeshStatistics& statistics() const { return t_.statistics; }
+  const std::vector<std::string>& warnings() const { return t_.warnings; }
+  double prepare_ms() const { return t_.prepare_ms; }
+  const PrepareTimings& timings() const { return t_.timings; }
+
+  std::size_t n_vertices() const { return t_.positions.size(); }
+  /// The faces around vertex v, in increasing id order.
+  IdRange faces_around(std::uint32_t v) const { return {t_.vertex_faces.begin(v), t_.vertex_faces.end(v)}; }
+  std::size_t n_faces() const { return t_.triangles.size(); }
+
   static constexpr std::uint32_t kNoEdge = UINT32_MAX;
   /// The slot of edge a-b in a's adjacency row (an index into neighbors, neighbor_edge_lengths
   /// and curvature.crease), or kNoEdge when a and b are not neighbours.
   std::uint32_t edge_slot(std::uint32_t a, std::uint32_t b) const {
-    for (auto k = neighbor_offsets[a]; k < neighbor_offsets[a + 1]; ++k)
-      if (neighbors[k] == b) return k;
+    for (auto k = t_.neighbor_offsets[a]; k < t_.neighbor_offsets[a + 1]; ++k)
+      if (t_.neighbors[k] == b) return k;
     return kNoEdge;
   }
   bool are_neighbors(std::uint32_t a, std::uint32_t b) const { return edge_slot(a, b) != kNoEdge; }
   /// Whether the edge in adjacency slot k is a crease of `sign` (+1 ridge, -1 valley; any when 0).
   bool is_crease_slot(std::uint32_t k, double sign) const {
-    const auto crease = curvature.crease[k];
+    const auto crease = t_.curvature.crease[k];
     return crease != 0 && (sign == 0 || crease == sign);
   }
   /// Whether a-b is an edge and a crease of `sign` (+1 ridge, -1 valley; any when 0).
@@ -161,11 +203,31 @@ struct PreparedMesh {
     const auto k = edge_slot(a, b);
     return k != kNoEdge && is_crease_slot(k, sign);
   }
+  /// Mean length of v's edges: the unit of distance near v. Meshes mix edges 100 times apart
+  /// in length (CAD tessellations, adaptive remeshes, separate parts), so a mesh-wide mean edge
+  /// says little about the edges a line is walking on. The mesh-wide mean for isolated vertices.
+  double local_edge_length(std::uint32_t v) const;
+  /// The point of face f at barycentric coordinates b (w.r.t. its corners in `triangles` order;
+  /// any type indexed 0..2: Barycentric, Eigen::Vector3d).
+  template <typename Weights>
+  Eigen::Vector3d point_at(std::uint32_t f, const Weights& b) const {
+    const auto& t = t_.triangles[f];
+    return b[0] * t_.positions[t[0]] + b[1] * t_.positions[t[1]] + b[2] * t_.positions[t[2]];
+  }
+  /// Feature strength in [0, 1] of vertex v: its feature value for lines of `feature_sign`
+  /// (engine/curvature.h) over the curvature scale, clamped.
+  double feature_strength(std::uint32_t v, double feature_sign) const {
+    const double s = feature_value(t_.curvature, v, feature_sign) / t_.curvature_scale;
+    return s > 1 ? 1 : s;
+  }
   /// The vertex nearest p among those that belong to a triangle (the lowest id among equally
   /// near ones). \pre p is finite.
-  std::uint32_t nearest_vertex(const Eigen::Vector3d& p) const { return vertex_index.nearest(p); }
+  std::uint32_t nearest_vertex(const Eigen::Vector3d& p) const { return t_.vertex_index.nearest(p); }
   /// Bytes this object holds (measured from container capacities), for cache budgets.
   std::size_t memory_bytes() const;
+
+ private:
+  PreparedTables t_;
 };
 
 /// Builds the prepared mesh from a raw triangle soup.
@@ -173,10 +235,5 @@ struct PreparedMesh {
 ///        requested (checked every 4096 faces and through the curvature stage).
 std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptions& options = {},
                                                  const Cancellation* cancel = nullptr);
-
-/// Mean length of v's edges: the unit of distance near v. Meshes mix edges 100 times apart
-/// in length (CAD tessellations, adaptive remeshes, separate parts), so a mesh-wide mean edge
-/// says little about the edges a line is walking on. The mesh-wide mean for isolated vertices.
-double local_edge_length(const PreparedMesh& mesh, std::uint32_t v);
 
 }  // namespace featureline

@@ -49,7 +49,7 @@ SegmentationResult segment_mesh(const PreparedMesh& mesh, const std::vector<Feat
   report.gaps.assign(lines.size(), 0);
   // The labels are for the original mesh (snap: its tables were built once in prepare_mesh) or
   // for the remeshed one, whose tables are new.
-  CutMesh cut{&mesh.positions, &mesh.triangles, &mesh.vertex_faces, &mesh.face_neighbors, {}};
+  CutMesh cut{&mesh.positions(), &mesh.triangles(), &mesh.vertex_faces(), &mesh.face_neighbors(), {}};
   VertexFaces remeshed_vertex_faces;
   std::vector<Triangle> remeshed_neighbors;
   if (options.mode == SegmentationMode::snap) {

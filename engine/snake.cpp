@@ -406,7 +406,7 @@ double strip_feature_strength(const PreparedMesh& pm, const FeatureStrip& strip,
   std::vector<double> strength;
   strength.reserve(strip.vertices.size());
   for (auto v : strip.vertices)
-    strength.push_back(std::min(feature_value(pm.curvature, v, line.feature_sign) / pm.curvature_scale, o.curvature_cap));
+    strength.push_back(std::min(feature_value(pm.curvature(), v, line.feature_sign) / pm.curvature_scale(), o.curvature_cap));
   if (strength.empty()) return 0;
   return value_of_rank(strength, std::size_t(0.9 * double(strength.size() - 1)));
 }
@@ -468,7 +468,7 @@ std::vector<SurfacePoint> map_to_surface(const PreparedMesh& pm, const FeatureSt
     s.position = Eigen::Vector3d::Zero();
     for (int k = 0; k < 3; ++k) {
       s.barycentric[k] = p.barycentric[k];
-      s.position += p.barycentric[k] * pm.positions[strip.vertices[tri[k]]];
+      s.position += p.barycentric[k] * pm.positions()[strip.vertices[tri[k]]];
     }
     out.push_back(s);
   }

@@ -59,7 +59,7 @@ std::vector<double> feature_potential(const PreparedMesh& pm, const FeatureStrip
                                       double feature_sign) {
   std::vector<double> potential(strip.vertices.size(), 0.0);
   for (std::size_t v = 0; v < potential.size(); ++v) {
-    const double s = std::min(feature_value(pm.curvature, strip.vertices[v], feature_sign) / pm.curvature_scale, o.curvature_cap);
+    const double s = std::min(feature_value(pm.curvature(), strip.vertices[v], feature_sign) / pm.curvature_scale(), o.curvature_cap);
     potential[v] = std::pow(s, o.exponent);
   }
   return potential;

@@ -94,36 +94,30 @@ double edge_parameter(const SurfaceLocation& l, std::uint32_t p, std::uint32_t q
   return l.t;
 }
 
-Eigen::Vector3d point_in_face(const PreparedMesh& mesh, std::uint32_t f, const Barycentric& w) {
-  const Triangle& t = mesh.triangles[f];
-  const auto& p = mesh.positions;
-  return w[0] * p[t[0]] + w[1] * p[t[1]] + w[2] * p[t[2]];
-}
-
 Eigen::Vector3d position_of(const PreparedMesh& mesh, const SurfaceLocation& l) {
-  const auto& p = mesh.positions;
+  const auto& p = mesh.positions();
   switch (l.kind) {
     case SurfaceLocation::vertex: return p[l.a];
     case SurfaceLocation::edge: return (1 - l.t) * p[l.a] + l.t * p[l.b];
-    case SurfaceLocation::face: return point_in_face(mesh, l.a, l.w);
+    case SurfaceLocation::face: return mesh.point_at(l.a, l.w);
   }
   return p[0];
 }
 
 SurfacePoint surface_point_at_vertex(const PreparedMesh& pm, std::uint32_t v) {
   SurfacePoint s;
-  s.position = pm.positions[v];
-  s.face = pm.vertex_face[v];
-  const auto& t = pm.triangles[s.face];
+  s.position = pm.positions()[v];
+  s.face = pm.vertex_face()[v];
+  const auto& t = pm.triangles()[s.face];
   for (int k = 0; k < 3; ++k) s.barycentric[k] = t[k] == v ? 1.0 : 0.0;
   return s;
 }
 
 void check_surface_point(const PreparedMesh& mesh, std::uint32_t face, const Barycentric& barycentric,
                          const std::string& where) {
-  if (face >= mesh.triangles.size())
+  if (face >= mesh.triangles().size())
     throw InvalidInputError(where + ": face " + std::to_string(face) + " is out of range (the mesh has " +
-                            std::to_string(mesh.triangles.size()) + " faces)");
+                            std::to_string(mesh.triangles().size()) + " faces)");
   double sum = 0;
   for (double x : barycentric) {
     if (!std::isfinite(x) || x < -1e-6)

@@ -74,7 +74,5 @@ SurfacePoint surface_point_at_vertex(const PreparedMesh& mesh, std::uint32_t v);
 void check_surface_point(const PreparedMesh& mesh, std::uint32_t face, const Barycentric& barycentric,
                          const std::string& where);
 
-/// The 3D point at barycentric coordinates w of face f.
-Eigen::Vector3d point_in_face(const PreparedMesh& mesh, std::uint32_t f, const Barycentric& w);
 
 }  // namespace featureline

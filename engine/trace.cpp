@@ -40,8 +40,8 @@ double sign_value(FeatureSign sign) { return sign == FeatureSign::ridge ? 1.0 : 
 // v's neighbours across crease edges of `sign`, in adjacency order.
 std::vector<std::uint32_t> crease_neighbors(const PreparedMesh& mesh, std::uint32_t v, double sign) {
   std::vector<std::uint32_t> out;
-  for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k)
-    if (mesh.curvature.crease[k] == sign) out.push_back(mesh.neighbors[k]);
+  for (auto k = mesh.neighbor_offsets()[v]; k < mesh.neighbor_offsets()[v + 1]; ++k)
+    if (mesh.curvature().crease[k] == sign) out.push_back(mesh.neighbors()[k]);
   return out;
 }
 
@@ -61,7 +61,7 @@ bool on_crease_run(const PreparedMesh& mesh, std::uint32_t v, double sign) {
 
 // d in v's tangent plane, unit length (d itself, normalised, where v has no normal).
 Eigen::Vector3d tangent_at(const PreparedMesh& mesh, std::uint32_t v, const Eigen::Vector3d& d) {
-  const Eigen::Vector3d& n = mesh.vertex_normals[v];
+  const Eigen::Vector3d& n = mesh.vertex_normals()[v];
   const Eigen::Vector3d t = d - d.dot(n) * n;
   return t.squaredNorm() > 1e-24 * d.squaredNorm() ? t.normalized() : d.normalized();
 }
@@ -78,8 +78,8 @@ std::vector<std::pair<std::uint32_t, int>> rings_around(const PreparedMesh& mesh
     const std::size_t ring_end = found.size();
     for (std::size_t i = ring_begin; i < ring_end; ++i) {
       const auto u = found[i].first;
-      for (auto k = mesh.neighbor_offsets[u]; k < mesh.neighbor_offsets[u + 1]; ++k) {
-        const auto w = mesh.neighbors[k];
+      for (auto k = mesh.neighbor_offsets()[u]; k < mesh.neighbor_offsets()[u + 1]; ++k) {
+        const auto w = mesh.neighbors()[k];
         if (!passable(w)) continue;
         if (std::any_of(found.begin(), found.end(), [w](const auto& f) { return f.first == w; })) continue;
         found.emplace_back(w, ring);
@@ -102,9 +102,9 @@ std::vector<std::uint32_t> ring_path(const PreparedMesh& mesh, const std::vector
   std::vector<std::uint32_t> path{to};
   for (int ring = ring_of(to); ring > 0; --ring) {
     const auto u = path.back();
-    for (auto k = mesh.neighbor_offsets[u]; k < mesh.neighbor_offsets[u + 1]; ++k)
-      if (ring_of(mesh.neighbors[k]) == ring - 1) {
-        path.push_back(mesh.neighbors[k]);
+    for (auto k = mesh.neighbor_offsets()[u]; k < mesh.neighbor_offsets()[u + 1]; ++k)
+      if (ring_of(mesh.neighbors()[k]) == ring - 1) {
+        path.push_back(mesh.neighbors()[k]);
         break;
       }
   }
@@ -131,7 +131,7 @@ std::optional<Seed> nearest_crease_seed(const PreparedMesh& mesh, std::uint32_t 
     const bool ridge_run = only >= 0 && on_crease_run(mesh, u, 1), valley_run = only <= 0 && on_crease_run(mesh, u, -1);
     if (!ridge_run && !valley_run) continue;
     const bool ridge = ridge_run && (!valley_run || crease_neighbors(mesh, u, 1).size() >= crease_neighbors(mesh, u, -1).size());
-    const double distance = (mesh.positions[u] - mesh.positions[v]).norm();
+    const double distance = (mesh.positions()[u] - mesh.positions()[v]).norm();
     if (best && (distance > best_distance || (distance == best_distance && u > best->vertex))) continue;
     best = Seed{u, ridge ? FeatureSign::ridge : FeatureSign::valley, true};
     best_ring = ring;
@@ -144,9 +144,9 @@ std::optional<Seed> nearest_crease_seed(const PreparedMesh& mesh, std::uint32_t 
 std::uint32_t climb(const PreparedMesh& mesh, std::uint32_t v, double sign, int steps) {
   for (int i = 0; i < steps; ++i) {
     std::uint32_t best = v;
-    for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k)
-      if (feature_value(mesh.curvature, mesh.neighbors[k], sign) > feature_value(mesh.curvature, best, sign))
-        best = mesh.neighbors[k];
+    for (auto k = mesh.neighbor_offsets()[v]; k < mesh.neighbor_offsets()[v + 1]; ++k)
+      if (feature_value(mesh.curvature(), mesh.neighbors()[k], sign) > feature_value(mesh.curvature(), best, sign))
+        best = mesh.neighbors()[k];
     if (best == v) break;
     v = best;
   }
@@ -157,7 +157,7 @@ Seed find_seed(const PreparedMesh& mesh, std::uint32_t v, const TraceOptions& op
   const double only = options.sign == TraceSign::ridge ? 1.0 : options.sign == TraceSign::valley ? -1.0 : 0.0;
   if (auto crease = nearest_crease_seed(mesh, v, options.snap_rings, only)) return *crease;
   Seed seed;
-  const double sign = only != 0 ? only : (mesh.curvature.k_max[v] >= -mesh.curvature.k_min[v] ? 1.0 : -1.0);
+  const double sign = only != 0 ? only : (mesh.curvature().k_max[v] >= -mesh.curvature().k_min[v] ? 1.0 : -1.0);
   seed.sign = sign > 0 ? FeatureSign::ridge : FeatureSign::valley;
   seed.vertex = climb(mesh, v, sign, options.snap_rings);
   return seed;
@@ -185,9 +185,9 @@ class Tracer {
  public:
   Tracer(const PreparedMesh& mesh, const TraceOptions& options, const Seed& seed, int max_edges, const Cancellation* cancel)
       : mesh_(mesh), options_(options), sign_(sign_value(seed.sign)), max_edges_(max_edges), cancel_(cancel) {
-    seed_value_ = feature_value(mesh.curvature, seed.vertex, sign_);
-    const double radius = mesh.curvature.radius > 0 ? mesh.curvature.radius : 1.0;
-    floor_times_h_ = 2 * options.min_signal_to_noise * mesh.curvature.noise / (radius * radius);
+    seed_value_ = feature_value(mesh.curvature(), seed.vertex, sign_);
+    const double radius = mesh.curvature().radius > 0 ? mesh.curvature().radius : 1.0;
+    floor_times_h_ = 2 * options.min_signal_to_noise * mesh.curvature().noise / (radius * radius);
     path_options_.feature_weight_floor = 0.05;
     blocked_.push_back(seed.vertex);
   }
@@ -197,14 +197,14 @@ class Tracer {
   std::size_t steps() const { return steps_; }
   std::vector<TraceJunction>& junctions() { return junctions_; }
   /// Whether the seed's feature is strong enough to follow at all (see trace_feature).
-  double floor_at(std::uint32_t v) const { return floor_times_h_ / local_edge_length(mesh_, v); }
+  double floor_at(std::uint32_t v) const { return floor_times_h_ / mesh_.local_edge_length(v); }
 
   /// Advances `walk` by one step; marks it done when it ends (or when it closes the line).
   void advance(Walk& walk, Walk& other) {
     throw_if_cancelled(cancel_);
     const std::uint32_t c = walk.path.back();
     if (edges_ >= std::size_t(max_edges_)) return finish(walk, TraceStop::max_edges);
-    if (walk.path.size() > 1 && mesh_.boundary_vertex[c]) return finish(walk, TraceStop::boundary);
+    if (walk.path.size() > 1 && mesh_.boundary_vertex()[c]) return finish(walk, TraceStop::boundary);
     Step step = crease_step(walk, other);
     if (step.path.empty() && !step.stop) step = smooth_step(walk, other);
     if (step.stop) return finish(walk, *step.stop);
@@ -237,13 +237,13 @@ class Tracer {
     ++steps_;
     // The chord over the last two edges: one edge's direction zig-zags on irregular meshes.
     const std::size_t back = walk.path.size() >= 3 ? walk.path.size() - 3 : 0;
-    const auto& P = mesh_.positions;
+    const auto& P = mesh_.positions();
     const Eigen::Vector3d chord = P[walk.path.back()] - P[path.size() > 2 ? path.front() : walk.path[back]];
     if (chord.squaredNorm() > 0) walk.direction = tangent_at(mesh_, walk.path.back(), chord);
   }
 
   double turn(const Walk& walk, std::uint32_t from, std::uint32_t to) const {
-    return angle_between(walk.direction, mesh_.positions[to] - mesh_.positions[from]);
+    return angle_between(walk.direction, mesh_.positions()[to] - mesh_.positions()[from]);
   }
 
   // Along crease edges of the line's sign. A smooth walk takes a crease only where it runs on
@@ -326,9 +326,9 @@ class Tracer {
   // Ends the walk where the feature fades.
   Step smooth_step(const Walk& walk, const Walk& other) const {
     const std::uint32_t c = walk.path.back();
-    const double h = local_edge_length(mesh_, c), reach = options_.step * h;
+    const double h = mesh_.local_edge_length(c), reach = options_.step * h;
     const Eigen::Vector3d d = tangent_at(mesh_, c, walk.direction);
-    const auto& P = mesh_.positions;
+    const auto& P = mesh_.positions();
     const std::uint32_t other_end = other.path.back();
     const Eigen::Vector3d to_end = P[other_end] - P[c];
     if (may_join(2) && edges_ >= std::size_t(4 * options_.step) && to_end.norm() <= reach + h && to_end.dot(d) > 0) {
@@ -348,13 +348,13 @@ class Tracer {
   // straight continuation (within max_turn of d, at most `far` ahead); kNoIndex when none.
   std::uint32_t boundary_ahead(const std::vector<std::pair<std::uint32_t, int>>& found, std::uint32_t c,
                                const Eigen::Vector3d& d, double far) const {
-    const auto& P = mesh_.positions;
-    const Eigen::Vector3d side = mesh_.vertex_normals[c].cross(d);
+    const auto& P = mesh_.positions();
+    const Eigen::Vector3d side = mesh_.vertex_normals()[c].cross(d);
     const double slope = std::tan(options_.max_turn * kPi / 180);
     std::uint32_t best = kNoIndex;
     double best_lateral = HUGE_VAL;
     for (const auto& [x, ring] : found) {
-      if (!mesh_.boundary_vertex[x]) continue;
+      if (!mesh_.boundary_vertex()[x]) continue;
       const Eigen::Vector3d r = P[x] - P[c];
       const double along = r.dot(d), lateral = std::abs(r.dot(side));
       if (along <= 0 || along > far || lateral > slope * along) continue;
@@ -370,8 +370,8 @@ class Tracer {
   // kNoIndex when there is none.
   std::uint32_t crest_ahead(const std::vector<std::pair<std::uint32_t, int>>& found, std::uint32_t c,
                             const Eigen::Vector3d& d, double near, double far) const {
-    const auto& P = mesh_.positions;
-    const Eigen::Vector3d& n = mesh_.vertex_normals[c];
+    const auto& P = mesh_.positions();
+    const Eigen::Vector3d& n = mesh_.vertex_normals()[c];
     const Eigen::Vector3d side = n.cross(d);
     const double slope = std::tan(options_.max_turn * kPi / 180);
     struct Candidate {
@@ -385,7 +385,7 @@ class Tracer {
       if (along < near || along > far) continue;
       const double lateral = r.dot(side);
       if (std::abs(lateral) > slope * along) continue;
-      section.push_back({x, lateral, feature_value(mesh_.curvature, x, sign_)});
+      section.push_back({x, lateral, feature_value(mesh_.curvature(), x, sign_)});
     }
     if (section.empty()) return kNoIndex;
     const auto strongest = std::max_element(section.begin(), section.end(), [](const Candidate& a, const Candidate& b) {
@@ -423,11 +423,11 @@ class Tracer {
   // feature value of its vertices after c) has faded below the stop strength or the noise floor.
   Step weighted_step(std::uint32_t c, std::uint32_t target) const {
     if (target == kNoIndex) return {};
-    const double reach = (options_.step + 1) * local_edge_length(mesh_, c);
+    const double reach = (options_.step + 1) * mesh_.local_edge_length(c);
     auto path = shortest_edge_path(mesh_, c, target, true, path_options_, sign_, &blocked_, cancel_, 4 * reach);
     if (!path) return {};
     double sum = 0;
-    for (std::size_t i = 1; i < path->size(); ++i) sum += feature_value(mesh_.curvature, (*path)[i], sign_);
+    for (std::size_t i = 1; i < path->size(); ++i) sum += feature_value(mesh_.curvature(), (*path)[i], sign_);
     const double mean = sum / double(path->size() - 1);
     if (mean < options_.stop_strength * seed_value_ || mean < floor_at(c)) return Step{{}, TraceStop::feature_end, false};
     return Step{std::move(*path), std::nullopt, false};
@@ -451,7 +451,7 @@ class Tracer {
 // pair that lines up best); a chain's end has one walk along the chain, the other looks past it.
 void start_on_crease(const PreparedMesh& mesh, const Seed& seed, Walk& forward, Walk& backward,
                      std::vector<TraceJunction>& junctions, const TraceOptions& options) {
-  const auto& P = mesh.positions;
+  const auto& P = mesh.positions();
   const auto branches = crease_neighbors(mesh, seed.vertex, sign_value(seed.sign));
   std::uint32_t a = branches.front(), b = kNoIndex;
   double straightest = -1;
@@ -480,10 +480,10 @@ void start_on_crease(const PreparedMesh& mesh, const Seed& seed, Walk& forward, 
 // shape. std::nullopt where the field falls by less than kMinCrestFall every way (a sphere, a
 // cylinder: nothing to follow).
 std::optional<Eigen::Vector3d> crest_axis(const PreparedMesh& mesh, std::uint32_t seed, double sign, double step) {
-  const auto& P = mesh.positions;
-  const Eigen::Vector3d& n = mesh.vertex_normals[seed];
+  const auto& P = mesh.positions();
+  const Eigen::Vector3d& n = mesh.vertex_normals()[seed];
   const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
-  const double h = local_edge_length(mesh, seed);
+  const double h = mesh.local_edge_length(seed);
   constexpr int kSectors = 16;
   for (double scale : {1.0, 2.0, 4.0}) {
     const double radius = step * scale * h;
@@ -496,7 +496,7 @@ std::optional<Eigen::Vector3d> crest_axis(const PreparedMesh& mesh, std::uint32_
       if (distance < radius - h) continue;
       const double angle = std::atan2(r.dot(w), r.dot(u));  // (-pi, pi]
       const int sector = int(std::floor((angle + kPi) / (2 * kPi) * kSectors)) % kSectors;
-      sum[sector % (kSectors / 2)] += feature_value(mesh.curvature, v, sign);
+      sum[sector % (kSectors / 2)] += feature_value(mesh.curvature(), v, sign);
       count[sector % (kSectors / 2)] += 1;
     }
     int along = -1;
@@ -519,7 +519,7 @@ std::optional<Eigen::Vector3d> crest_axis(const PreparedMesh& mesh, std::uint32_
 void start_on_crest(const PreparedMesh& mesh, const Seed& seed, const Tracer& tracer, const TraceOptions& options,
                     Walk& forward, Walk& backward) {
   const auto at = "vertex " + std::to_string(seed.vertex);
-  const double strength = tracer.seed_value() / mesh.curvature_scale;
+  const double strength = tracer.seed_value() / mesh.curvature_scale();
   if (!(tracer.seed_value() > 0) || tracer.seed_value() < tracer.floor_at(seed.vertex))
     throw GeometryError("no ridge, valley or crease to trace at " + at + ": its feature strength " + format_number(strength) +
                         " is within the noise");
@@ -547,7 +547,7 @@ TraceResult trace_feature(const PreparedMesh& mesh, std::uint32_t vertex, const 
   if (vertex >= mesh.n_vertices())
     throw InvalidInputError("the trace starts at vertex " + std::to_string(vertex) + ", but the mesh has only " +
                             std::to_string(mesh.n_vertices()) + " vertices");
-  if (mesh.component[vertex] < 0) throw GeometryError("vertex " + std::to_string(vertex) + " belongs to no triangle");
+  if (mesh.component()[vertex] < 0) throw GeometryError("vertex " + std::to_string(vertex) + " belongs to no triangle");
   TraceResult result;
   result.clicked = vertex;
   const Seed seed = find_seed(mesh, vertex, options);
@@ -555,7 +555,7 @@ TraceResult trace_feature(const PreparedMesh& mesh, std::uint32_t vertex, const 
   result.sign = seed.sign;
   result.on_crease = seed.on_crease;
   Tracer tracer(mesh, options, seed, options.max_edges, cancel);
-  result.seed_strength = tracer.seed_value() / mesh.curvature_scale;
+  result.seed_strength = tracer.seed_value() / mesh.curvature_scale();
   Walk forward, backward;
   forward.path = backward.path = {seed.vertex};
   if (seed.on_crease)

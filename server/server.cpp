@@ -801,7 +801,7 @@ struct FeaturelineServer::Impl {
     auto session = session_or_404(req.matches[1]);
     // The field the engine reads (engine/curvature.h), not the one-ring mean curvature H: on a
     // noisy scan H is mostly noise, and the page snaps keys to this field's extremes.
-    const auto h = dominant_curvatures(session->mesh->curvature);
+    const auto h = dominant_curvatures(session->mesh->curvature());
     if (accepts(req, "application/octet-stream")) {
       static_assert(sizeof(float) == 4, "float32 output");
       std::string bytes(h.size() * 4, '\0');

@@ -73,7 +73,7 @@ inline SearchScratch& search_scratch(int which = 0) {
   return s[which];
 }
 
-/// The cost of reaching w = mesh.neighbors[k] from the settled vertex v, when that improves w's
+/// The cost of reaching w = mesh.neighbors()[k] from the settled vertex v, when that improves w's
 /// label within max_cost; -1 otherwise (w settled, the edge skipped, NaN costs).
 template <class EdgeCost>
 double improved_cost(const SearchScratch& s, std::uint32_t v, std::uint32_t k, std::uint32_t w, EdgeCost& edge_cost,
@@ -88,7 +88,7 @@ double improved_cost(const SearchScratch& s, std::uint32_t v, std::uint32_t k, s
 
 /// The cheapest path over mesh edges from `from` to the first vertex `is_goal(v)` accepts, both
 /// ends included; empty when no goal is reachable within `max_cost`.
-///  - `edge_cost(v, k)`: cost of the edge from v to mesh.neighbors[k], or negative to skip it;
+///  - `edge_cost(v, k)`: cost of the edge from v to mesh.neighbors()[k], or negative to skip it;
 ///  - `heuristic(v)`: a lower bound of the cost from v to the goal (A*; return 0 for Dijkstra).
 /// Checks `cancel` every 4096 settled vertices. Settles vertices in (cost + heuristic, id) order,
 /// so equal-cost ties resolve the same way on every run.
@@ -116,8 +116,8 @@ std::vector<std::uint32_t> cheapest_edge_path(const PreparedMesh& mesh, std::uin
       reached = true;
       break;
     }
-    for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) {
-      const auto w = mesh.neighbors[k];
+    for (auto k = mesh.neighbor_offsets()[v]; k < mesh.neighbor_offsets()[v + 1]; ++k) {
+      const auto w = mesh.neighbors()[k];
       const double cost = improved_cost(s, v, k, w, edge_cost, max_cost);
       if (cost < 0) continue;
       s.label(w, cost, v);
@@ -138,7 +138,7 @@ std::vector<std::uint32_t> cheapest_edge_path(const PreparedMesh& mesh, std::uin
 /// keys g_b - p, both consistent, so the search stops once the two smallest keys sum to the best
 /// path found. Where no feature guides it a one-sided search floods a disc as wide as the segment
 /// is long; the two halves flood two discs half as wide.
-///  - `edge_cost(v, k)`: cost of the edge between v and mesh.neighbors[k], the same both ways;
+///  - `edge_cost(v, k)`: cost of the edge between v and mesh.neighbors()[k], the same both ways;
 ///    negative to skip it;
 ///  - `blocked`: vertices no path may pass through (its two ends always may), or nullptr; they
 ///    are marked settled on both sides before the search, so they cost nothing per edge;
@@ -150,7 +150,7 @@ std::vector<std::uint32_t> cheapest_path_between(const PreparedMesh& mesh, std::
                                                  EdgeCost&& edge_cost, const std::vector<std::uint32_t>* blocked, double slope,
                                                  double max_cost, const Cancellation* cancel = nullptr) {
   if (from == to) return {from};
-  const auto& P = mesh.positions;
+  const auto& P = mesh.positions();
   const auto potential = [&](std::uint32_t v) {
     return 0.5 * slope * ((P[to] - P[v]).norm() - (P[from] - P[v]).norm());
   };
@@ -181,8 +181,8 @@ std::vector<std::uint32_t> cheapest_path_between(const PreparedMesh& mesh, std::
     if (s.closed(v)) continue;
     s.close(v);
     if ((++settled & 4095) == 0) throw_if_cancelled(cancel);
-    for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) {
-      const auto w = mesh.neighbors[k];
+    for (auto k = mesh.neighbor_offsets()[v]; k < mesh.neighbor_offsets()[v + 1]; ++k) {
+      const auto w = mesh.neighbors()[k];
       const double cost = improved_cost(s, v, k, w, edge_cost, max_cost);
       if (cost < 0) continue;
       s.label(w, cost, v);
@@ -204,7 +204,7 @@ std::vector<std::uint32_t> cheapest_path_between(const PreparedMesh& mesh, std::
 inline std::vector<std::uint32_t> shortest_path_between(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
                                                         double max_length) {
   return cheapest_path_between(
-      mesh, from, to, [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths[k]; }, nullptr, 1.0,
+      mesh, from, to, [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths()[k]; }, nullptr, 1.0,
       max_length);
 }
 
@@ -214,7 +214,7 @@ template <class IsGoal>
 std::vector<std::uint32_t> shortest_path_to(const PreparedMesh& mesh, std::uint32_t from, IsGoal&& is_goal,
                                             double max_length) {
   return cheapest_edge_path(
-      mesh, from, is_goal, [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths[k]; },
+      mesh, from, is_goal, [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths()[k]; },
       [](std::uint32_t) { return 0.0; }, max_length);
 }
 

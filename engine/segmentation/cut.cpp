@@ -50,11 +50,11 @@ void extend_chain(const PreparedMesh& mesh, VertexChain& chain, std::uint32_t v,
 VertexChain nearest_vertex_chain(const PreparedMesh& mesh, const FeatureLineResult& line, std::size_t& gaps) {
   VertexChain chain;
   for (const auto& s : line.refined) {
-    const Triangle& t = mesh.triangles[s.face];
-    const Eigen::Vector3d x = point_in_face(mesh, s.face, s.barycentric);
+    const Triangle& t = mesh.triangles()[s.face];
+    const Eigen::Vector3d x = mesh.point_at(s.face, s.barycentric);
     std::uint32_t nearest = t[0];
     for (auto v : t)
-      if ((mesh.positions[v] - x).squaredNorm() < (mesh.positions[nearest] - x).squaredNorm()) nearest = v;
+      if ((mesh.positions()[v] - x).squaredNorm() < (mesh.positions()[nearest] - x).squaredNorm()) nearest = v;
     extend_chain(mesh, chain, nearest, gaps);
   }
   if (line.closed && chain.vertices.size() > 2) extend_chain(mesh, chain, chain.vertices.front(), gaps);
@@ -69,14 +69,14 @@ void attach_chain_ends(const PreparedMesh& mesh, const std::vector<FeatureLineRe
   for (int end = 0; end < 2; ++end) {
     const auto v = end == 0 ? chains[i].vertices.front() : chains[i].vertices.back();
     auto attached = [&](std::uint32_t w) {
-      if (mesh.boundary_vertex[w]) return true;
+      if (mesh.boundary_vertex()[w]) return true;
       for (std::size_t j = 0; j < lines.size(); ++j)
         if (j != i && std::find(chains[j].vertices.begin(), chains[j].vertices.end(), w) != chains[j].vertices.end())
           return true;
       return false;
     };
     if (attached(v)) continue;
-    const double attach_radius = attach_distance * local_edge_length(mesh, v);
+    const double attach_radius = attach_distance * mesh.local_edge_length(v);
     const auto path = attach_radius > 0 ? shortest_path_to(mesh, v, attached, attach_radius) : std::vector<std::uint32_t>{};
     if (path.empty()) {
       report.loose_ends.push_back("line " + std::to_string(i) + " ends at vertex " + std::to_string(v) +
@@ -89,11 +89,11 @@ void attach_chain_ends(const PreparedMesh& mesh, const std::vector<FeatureLineRe
 
 /// Is `l` on the mesh boundary (a boundary vertex, or a point of a boundary edge)?
 bool on_mesh_boundary(const PreparedMesh& mesh, const SurfaceLocation& l) {
-  if (l.kind == SurfaceLocation::vertex) return mesh.boundary_vertex[l.a] != 0;
+  if (l.kind == SurfaceLocation::vertex) return mesh.boundary_vertex()[l.a] != 0;
   if (l.kind != SurfaceLocation::edge) return false;
-  const Triangle& t = mesh.triangles[l.home];
+  const Triangle& t = mesh.triangles()[l.home];
   for (int k = 0; k < 3; ++k)
-    if (mesh.face_neighbors[l.home][k] == kNoIndex && lies_on_edge(l, t[k], t[(k + 1) % 3])) return true;
+    if (mesh.face_neighbors()[l.home][k] == kNoIndex && lies_on_edge(l, t[k], t[(k + 1) % 3])) return true;
   return false;
 }
 
@@ -102,13 +102,13 @@ bool on_mesh_boundary(const PreparedMesh& mesh, const SurfaceLocation& l) {
 std::optional<SurfacePoint> attachment_for(const PreparedMesh& mesh, const std::vector<FeatureLineResult>& lines,
                                            std::size_t i, const SurfaceLocation& l, double attach_distance) {
   const Eigen::Vector3d x = position_of(mesh, l);
-  const auto& home = mesh.triangles[l.home];
+  const auto& home = mesh.triangles()[l.home];
   double best = attach_distance *
-                (local_edge_length(mesh, home[0]) + local_edge_length(mesh, home[1]) + local_edge_length(mesh, home[2])) / 3;
+                (mesh.local_edge_length(home[0]) + mesh.local_edge_length(home[1]) + mesh.local_edge_length(home[2])) / 3;
   std::optional<SurfacePoint> join;
   for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v)
-    if (mesh.boundary_vertex[v] && (mesh.positions[v] - x).norm() <= best)
-      best = (mesh.positions[v] - x).norm(), join = surface_point_at_vertex(mesh, v);
+    if (mesh.boundary_vertex()[v] && (mesh.positions()[v] - x).norm() <= best)
+      best = (mesh.positions()[v] - x).norm(), join = surface_point_at_vertex(mesh, v);
   for (std::size_t j = 0; j < lines.size(); ++j)
     if (j != i)
       for (const auto& s : lines[j].refined)
@@ -124,7 +124,7 @@ std::vector<SurfacePoint> points_with_attached_ends(const PreparedMesh& mesh, co
   if (lines[i].closed) return points;
   for (int end = 0; end < 2; ++end) {
     const SurfacePoint& e = end == 0 ? points.front() : points.back();
-    const SurfaceLocation l = locate_in_face(mesh.triangles, e.face, e.barycentric, snap);
+    const SurfaceLocation l = locate_in_face(mesh.triangles(), e.face, e.barycentric, snap);
     if (on_mesh_boundary(mesh, l)) continue;
     const auto join = attachment_for(mesh, lines, i, l, attach_distance);
     if (!join) {
@@ -146,7 +146,7 @@ std::vector<SurfaceLocation> line_locations(const PreparedMesh& mesh, const std:
                                             bool closed, double snap) {
   std::vector<SurfaceLocation> locations;
   for (const auto& s : points) {
-    const auto l = locate_in_face(mesh.triangles, s.face, s.barycentric, snap);
+    const auto l = locate_in_face(mesh.triangles(), s.face, s.barycentric, snap);
     if (locations.empty() || !same_location(locations.back(), l)) locations.push_back(l);
   }
   if (closed && locations.size() > 2 && !same_location(locations.back(), locations.front()))

@@ -7,10 +7,10 @@
 
 namespace featureline {
 
-Remesher::Remesher(const PreparedMesh& mesh, double snap) : mesh_(mesh), snap_(snap), subs_(mesh.triangles.size()) {
-  out_.positions = mesh.positions;
-  out_.triangles = mesh.triangles;
-  out_.source_faces.resize(mesh.triangles.size());
+Remesher::Remesher(const PreparedMesh& mesh, double snap) : mesh_(mesh), snap_(snap), subs_(mesh.triangles().size()) {
+  out_.positions = mesh.positions();
+  out_.triangles = mesh.triangles();
+  out_.source_faces.resize(mesh.triangles().size());
   std::iota(out_.source_faces.begin(), out_.source_faces.end(), 0u);
 }
 
@@ -38,7 +38,7 @@ std::uint32_t Remesher::locate_on_edge(std::uint32_t f, const SurfaceLocation& y
 
 /// Inside face f: on a vertex, on a sub-edge or inside the sub-triangle holding it most deeply.
 std::uint32_t Remesher::locate_in_face(std::uint32_t f, const SurfaceLocation& y) {
-  const Barycentric wy = barycentric_of(mesh_.triangles, f, y);
+  const Barycentric wy = barycentric_of(mesh_.triangles(), f, y);
   const Eigen::Vector2d py(wy[1], wy[2]);
   double best = -HUGE_VAL;
   std::uint32_t best_t = kNoIndex;
@@ -65,8 +65,8 @@ std::uint32_t Remesher::locate_in_face(std::uint32_t f, const SurfaceLocation& y
 }
 
 std::uint32_t Remesher::walk(std::uint32_t x, const SurfaceLocation& y, std::uint32_t f, int line) {
-  const Triangle& corners = mesh_.triangles[f];
-  const Barycentric wy = barycentric_of(mesh_.triangles, f, y);
+  const Triangle& corners = mesh_.triangles()[f];
+  const Barycentric wy = barycentric_of(mesh_.triangles(), f, y);
   const Eigen::Vector2d py(wy[1], wy[2]);
   for (int guard = 0; guard < 100000; ++guard) {
     if (y.kind == SurfaceLocation::vertex && x == y.a) return x;
@@ -86,7 +86,7 @@ std::uint32_t Remesher::walk(std::uint32_t x, const SurfaceLocation& y, std::uin
 
 /// x and y on edge k of original face f: to the next vertex along it, or to y.
 Remesher::Move Remesher::move_along_edge(std::uint32_t x, const SurfaceLocation& y, std::uint32_t f, int k, int line) {
-  const Triangle& corners = mesh_.triangles[f];
+  const Triangle& corners = mesh_.triangles()[f];
   const auto p = corners[k], q = corners[(k + 1) % 3];
   const double tx = edge_parameter(location_of(x), p, q), ty = edge_parameter(y, p, q), dir = ty > tx ? 1.0 : -1.0;
   std::uint32_t b = kNoIndex;
@@ -117,7 +117,7 @@ Remesher::Move Remesher::move_along_edge(std::uint32_t x, const SurfaceLocation&
 /// From x through the sub-triangle whose corner angle at x holds the direction to y: ends at y
 /// when it is in that triangle (or on its far edge), else crosses the far edge.
 Remesher::Move Remesher::move_across(std::uint32_t x, const SurfaceLocation& y, std::uint32_t f, int line) {
-  const Barycentric wy = barycentric_of(mesh_.triangles, f, y);
+  const Barycentric wy = barycentric_of(mesh_.triangles(), f, y);
   const Eigen::Vector2d py(wy[1], wy[2]), px = coords(f, x), vy = py - px;
   double best = -HUGE_VAL;
   std::uint32_t tri = kNoIndex, b = kNoIndex, c = kNoIndex;
@@ -149,7 +149,7 @@ Remesher::Move Remesher::move_across(std::uint32_t x, const SurfaceLocation& y, 
     if (height > kSameLocation) return end_at(split_face(tri, y));
     if (height >= -kSameLocation && border < 0) return end_at(split_edge(f, b, c, y));
   } else if (border >= 0) {
-    const Triangle& corners = mesh_.triangles[f];
+    const Triangle& corners = mesh_.triangles()[f];
     const auto p = corners[border], q = corners[(border + 1) % 3];
     if (lies_on_edge(y, p, q)) {
       const double tb = edge_parameter(location_of(b), p, q), tc = edge_parameter(location_of(c), p, q);
@@ -174,7 +174,7 @@ SurfaceLocation Remesher::location_of(std::uint32_t v) const {
 }
 
 Eigen::Vector2d Remesher::coords(std::uint32_t f, std::uint32_t v) const {
-  const auto w = barycentric_in(mesh_.triangles, f, location_of(v));
+  const auto w = barycentric_in(mesh_.triangles(), f, location_of(v));
   if (!w) throw std::logic_error("segmentation: a vertex is not in its face");
   return {(*w)[1], (*w)[2]};
 }
@@ -186,7 +186,7 @@ std::vector<std::uint32_t>& Remesher::subs(std::uint32_t f) {
 
 /// k when b and c both lie on edge k = (corner k, corner k+1) of original face f, else -1.
 int Remesher::original_edge_of(std::uint32_t f, std::uint32_t b, std::uint32_t c) const {
-  const Triangle& t = mesh_.triangles[f];
+  const Triangle& t = mesh_.triangles()[f];
   const SurfaceLocation lb = location_of(b), lc = location_of(c);
   for (int k = 0; k < 3; ++k)
     if (lies_on_edge(lb, t[k], t[(k + 1) % 3]) && lies_on_edge(lc, t[k], t[(k + 1) % 3])) return k;
@@ -195,7 +195,7 @@ int Remesher::original_edge_of(std::uint32_t f, std::uint32_t b, std::uint32_t c
 
 /// The point at fraction u from b to c, on the original edge when bc lies on one.
 SurfaceLocation Remesher::between(std::uint32_t f, std::uint32_t b, std::uint32_t c, double u) const {
-  const Triangle& t = mesh_.triangles[f];
+  const Triangle& t = mesh_.triangles()[f];
   const int k = original_edge_of(f, b, c);
   SurfaceLocation l;
   l.home = f;
@@ -207,8 +207,8 @@ SurfaceLocation Remesher::between(std::uint32_t f, std::uint32_t b, std::uint32_
     l.t = (1 - u) * edge_parameter(location_of(b), p, q) + u * edge_parameter(location_of(c), p, q);
     return l;
   }
-  const Barycentric wb = barycentric_of(mesh_.triangles, f, location_of(b));
-  const Barycentric wc = barycentric_of(mesh_.triangles, f, location_of(c));
+  const Barycentric wb = barycentric_of(mesh_.triangles(), f, location_of(b));
+  const Barycentric wc = barycentric_of(mesh_.triangles(), f, location_of(c));
   l.kind = SurfaceLocation::face;
   l.a = f;
   for (int i = 0; i < 3; ++i) l.w[i] = (1 - u) * wb[i] + u * wc[i];
@@ -242,7 +242,7 @@ std::uint32_t Remesher::split_face(std::uint32_t t, const SurfaceLocation& l) {
 std::uint32_t Remesher::split_edge(std::uint32_t f, std::uint32_t b, std::uint32_t c, const SurfaceLocation& l) {
   std::vector<std::uint32_t> faces{f};
   const int k = original_edge_of(f, b, c);
-  if (k >= 0 && mesh_.face_neighbors[f][k] != kNoIndex) faces.push_back(mesh_.face_neighbors[f][k]);
+  if (k >= 0 && mesh_.face_neighbors()[f][k] != kNoIndex) faces.push_back(mesh_.face_neighbors()[f][k]);
   const auto m = add_vertex(l);
   for (auto g : faces) {
     const std::vector<std::uint32_t> list = subs(g);  // copy: add_triangle appends to it

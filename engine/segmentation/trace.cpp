@@ -17,13 +17,13 @@ Traced Tracer::trace(const SurfaceLocation& from, const SurfaceLocation& to, std
 }
 
 std::vector<std::uint32_t> Tracer::faces_containing(const SurfaceLocation& l) const {
-  const VertexFaces& vf = mesh_.vertex_faces;
+  const VertexFaces& vf = mesh_.vertex_faces();
   std::vector<std::uint32_t> out;
   switch (l.kind) {
     case SurfaceLocation::vertex: out.assign(vf.begin(l.a), vf.end(l.a)); break;
     case SurfaceLocation::edge:
       for (auto it = vf.begin(l.a); it != vf.end(l.a); ++it)
-        if (corner_of(mesh_.triangles[*it], l.b) >= 0) out.push_back(*it);
+        if (corner_of(mesh_.triangles()[*it], l.b) >= 0) out.push_back(*it);
       break;
     case SurfaceLocation::face: out.push_back(l.a); break;
   }
@@ -32,8 +32,8 @@ std::vector<std::uint32_t> Tracer::faces_containing(const SurfaceLocation& l) co
 
 /// Barycentric coordinates in face f of x projected on f's plane (outside f when x is).
 std::optional<Barycentric> Tracer::project(std::uint32_t f, const Eigen::Vector3d& x) const {
-  const Triangle& t = mesh_.triangles[f];
-  const auto& p = mesh_.positions;
+  const Triangle& t = mesh_.triangles()[f];
+  const auto& p = mesh_.positions();
   const Eigen::Vector3d e1 = p[t[1]] - p[t[0]], e2 = p[t[2]] - p[t[0]], r = x - p[t[0]];
   const double a = e1.dot(e1), b = e1.dot(e2), c = e2.dot(e2), det = a * c - b * b;
   if (!(det > 1e-24 * a * c)) return std::nullopt;
@@ -44,16 +44,16 @@ std::optional<Barycentric> Tracer::project(std::uint32_t f, const Eigen::Vector3
 /// `to` (held by face g, f's neighbour across an edge) in f's barycentric frame, with g unfolded
 /// into f's plane across the shared edge; nullopt when f and g share no edge or are degenerate.
 std::optional<Barycentric> Tracer::unfold_into(std::uint32_t f, std::uint32_t g, const SurfaceLocation& to) const {
-  const Triangle& tf = mesh_.triangles[f];
-  const Triangle& tg = mesh_.triangles[g];
-  const auto& p = mesh_.positions;
+  const Triangle& tf = mesh_.triangles()[f];
+  const Triangle& tg = mesh_.triangles()[g];
+  const auto& p = mesh_.positions();
   int shared = 0, s = -1;
   for (int k = 0; k < 3; ++k) {
     if (corner_of(tf, tg[k]) >= 0) ++shared;
     else s = k;
   }
   if (shared != 2) return std::nullopt;
-  const auto wg = barycentric_of(mesh_.triangles, g, to);
+  const auto wg = barycentric_of(mesh_.triangles(), g, to);
   // f's 2D frame.
   const Eigen::Vector3d o = p[tf[0]], n = (p[tf[1]] - o).cross(p[tf[2]] - o);
   const double nn = n.norm(), l1 = (p[tf[1]] - o).norm();
@@ -86,10 +86,10 @@ std::optional<Barycentric> Tracer::unfold_into(std::uint32_t f, std::uint32_t g,
 /// shared edge when a face holding it is f's neighbour, else projected on f's plane.
 std::optional<Barycentric> Tracer::target_in(std::uint32_t f, const SurfaceLocation& to,
                                              const Eigen::Vector3d& target) const {
-  if (auto w = barycentric_in(mesh_.triangles, f, to)) return w;
+  if (auto w = barycentric_in(mesh_.triangles(), f, to)) return w;
   for (auto g : faces_containing(to)) {
-    const Triangle& tf = mesh_.triangles[f];
-    const Triangle& tg = mesh_.triangles[g];
+    const Triangle& tf = mesh_.triangles()[f];
+    const Triangle& tg = mesh_.triangles()[g];
     int shared = 0;
     for (int k = 0; k < 3; ++k) shared += corner_of(tf, tg[k]) >= 0;
     if (shared != 2) continue;
@@ -101,8 +101,8 @@ std::optional<Barycentric> Tracer::target_in(std::uint32_t f, const SurfaceLocat
 /// Leaves vertex c through the face whose corner angle holds the direction to the target.
 bool Tracer::leave_vertex(const SurfaceLocation& c, const SurfaceLocation& to, const Eigen::Vector3d& target,
                           SurfaceLocation& next, std::uint32_t& face) const {
-  const auto& tris = mesh_.triangles;
-  const VertexFaces& vf = mesh_.vertex_faces;
+  const auto& tris = mesh_.triangles();
+  const VertexFaces& vf = mesh_.vertex_faces();
   double best = -HUGE_VAL;
   Barycentric best_q{0, 0, 0};
   int best_k = 0;
@@ -130,7 +130,7 @@ bool Tracer::leave_vertex(const SurfaceLocation& c, const SurfaceLocation& to, c
 /// point has two) to where it exits that face; along the edge when the line runs along it.
 bool Tracer::leave_edge_or_face(const SurfaceLocation& c, std::uint32_t came_from, const SurfaceLocation& to,
                                const Eigen::Vector3d& target, SurfaceLocation& next, std::uint32_t& face) const {
-  const auto& tris = mesh_.triangles;
+  const auto& tris = mesh_.triangles();
   std::vector<std::uint32_t> candidates;
   if (c.kind == SurfaceLocation::face) candidates.push_back(c.a);
   else
@@ -184,7 +184,7 @@ bool Tracer::walk(const SurfaceLocation& from, const SurfaceLocation& to, std::v
   std::uint32_t came_from = kNoIndex;
   for (int step = 0; step < 64; ++step) {
     for (auto f : faces_containing(c))
-      if (barycentric_in(mesh_.triangles, f, to)) {
+      if (barycentric_in(mesh_.triangles(), f, to)) {
         steps.push_back({to, f});
         return true;
       }
@@ -206,16 +206,16 @@ std::uint32_t Tracer::nearest_vertex(const SurfaceLocation& l) const {
     case SurfaceLocation::edge: return l.t < 0.5 ? l.a : l.b;
     case SurfaceLocation::face: {
       const int k = int(std::max_element(l.w.begin(), l.w.end()) - l.w.begin());
-      return mesh_.triangles[l.a][k];
+      return mesh_.triangles()[l.a][k];
     }
   }
   return l.a;
 }
 
 std::uint32_t Tracer::face_with_edge(std::uint32_t a, std::uint32_t b) const {
-  const VertexFaces& vf = mesh_.vertex_faces;
+  const VertexFaces& vf = mesh_.vertex_faces();
   for (auto it = vf.begin(a); it != vf.end(a); ++it)
-    if (corner_of(mesh_.triangles[*it], b) >= 0) return *it;
+    if (corner_of(mesh_.triangles()[*it], b) >= 0) return *it;
   return kNoIndex;
 }
 

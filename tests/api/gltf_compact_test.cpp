@@ -78,21 +78,21 @@ int check_round_trip(RawMesh raw) {
   const auto pm = prepare_mesh(std::move(raw));
   const Decoded d = decode(parse(prepared_mesh_to_compact_glb(*pm)));
   EXPECT_EQ(d.positions.size(), pm->n_vertices());
-  Eigen::Vector3d lo = pm->positions[0], hi = pm->positions[0];
-  for (const auto& p : pm->positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  Eigen::Vector3d lo = pm->positions()[0], hi = pm->positions()[0];
+  for (const auto& p : pm->positions()) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   const Eigen::Vector3d tolerance = (hi - lo) / 65535.0;
   double c_lo = HUGE_VAL, c_hi = -HUGE_VAL;
   for (std::uint32_t v = 0; v < pm->n_vertices(); ++v)
-    c_lo = std::min(c_lo, dominant_curvature(pm->curvature, v)), c_hi = std::max(c_hi, dominant_curvature(pm->curvature, v));
+    c_lo = std::min(c_lo, dominant_curvature(pm->curvature(), v)), c_hi = std::max(c_hi, dominant_curvature(pm->curvature(), v));
   for (std::size_t v = 0; v < d.positions.size(); ++v) {
     for (int k = 0; k < 3; ++k)
-      EXPECT_LE(std::abs(d.positions[v][k] - pm->positions[v][k]), tolerance[k] + 1e-12 * (1 + std::abs(lo[k])))
+      EXPECT_LE(std::abs(d.positions[v][k] - pm->positions()[v][k]), tolerance[k] + 1e-12 * (1 + std::abs(lo[k])))
           << "vertex " << v << " axis " << k;
-    EXPECT_LE(std::abs(d.curvature[v] - dominant_curvature(pm->curvature, std::uint32_t(v))), (c_hi - c_lo) / 65535.0 + 1e-12)
+    EXPECT_LE(std::abs(d.curvature[v] - dominant_curvature(pm->curvature(), std::uint32_t(v))), (c_hi - c_lo) / 65535.0 + 1e-12)
         << "vertex " << v;
   }
   std::vector<std::uint32_t> expected;
-  for (const auto& t : pm->triangles) expected.insert(expected.end(), t.begin(), t.end());
+  for (const auto& t : pm->triangles()) expected.insert(expected.end(), t.begin(), t.end());
   EXPECT_EQ(d.indices, expected);
   return d.index_component;
 }
@@ -122,8 +122,8 @@ using CreaseSet = std::set<std::tuple<std::uint32_t, std::uint32_t, int>>;
 CreaseSet marked_creases(const PreparedMesh& pm) {
   CreaseSet out;
   for (std::uint32_t v = 0; v < pm.n_vertices(); ++v)
-    for (std::uint32_t i = pm.neighbor_offsets[v]; i < pm.neighbor_offsets[v + 1]; ++i)
-      if (pm.curvature.crease[i] != 0 && v < pm.neighbors[i]) out.emplace(v, pm.neighbors[i], pm.curvature.crease[i]);
+    for (std::uint32_t i = pm.neighbor_offsets()[v]; i < pm.neighbor_offsets()[v + 1]; ++i)
+      if (pm.curvature().crease[i] != 0 && v < pm.neighbors()[i]) out.emplace(v, pm.neighbors()[i], pm.curvature().crease[i]);
   return out;
 }
 
@@ -153,13 +153,13 @@ void check_creases(RawMesh raw, std::size_t expected_at_least) {
   const auto pm = prepare_mesh(std::move(raw));
   const tinygltf::Model model = parse(prepared_mesh_to_compact_glb(*pm));
   const auto& extras = model.meshes.at(0).primitives.at(0).extras;
-  EXPECT_EQ(std::size_t(extras.Get("crease_edges").GetNumberAsInt()), pm->curvature.crease_edges);
-  EXPECT_DOUBLE_EQ(extras.Get("crease_angle").GetNumberAsDouble(), pm->curvature.crease_angle);
+  EXPECT_EQ(std::size_t(extras.Get("crease_edges").GetNumberAsInt()), pm->curvature().crease_edges);
+  EXPECT_DOUBLE_EQ(extras.Get("crease_angle").GetNumberAsDouble(), pm->curvature().crease_angle);
   std::size_t edges = 0;
   const CreaseSet sent = glb_creases(model, &edges), marked = marked_creases(*pm);
   EXPECT_EQ(edges, sent.size()) << "an edge sent twice";
   EXPECT_EQ(sent, marked);
-  EXPECT_EQ(sent.size(), pm->curvature.crease_edges);
+  EXPECT_EQ(sent.size(), pm->curvature().crease_edges);
   EXPECT_GE(sent.size(), expected_at_least);
 }
 
@@ -181,7 +181,7 @@ TEST(CompactGlb, NoisyCubeSendsTheCreasesOfTheAdaptiveAngleAndASmoothMeshNone) {
   // Noise along every axis: preparation raises the crease angle above 30 degrees, and the
   // edges sent are those it marked at that angle, not those past 30 degrees.
   const RawMesh noisy = testing::with_noise(testing::make_subdivided_cube(12), 0.15, 3);
-  EXPECT_GT(prepare_mesh(noisy)->curvature.crease_angle, 30.0);
+  EXPECT_GT(prepare_mesh(noisy)->curvature().crease_angle, 30.0);
   check_creases(noisy, 12 * 12 / 2);
   const auto pm = prepare_mesh(testing::make_icosphere(1.0, 3));
   const tinygltf::Model model = parse(prepared_mesh_to_compact_glb(*pm));

@@ -178,8 +178,8 @@ TEST(Requests, LineRequestsNameTheFieldInErrors) {
   EXPECT_EQ(one[0].keys[0], 3u);
   // The point key is the nearest vertex.
   double nearest = HUGE_VAL;
-  for (std::uint32_t v = 0; v < mesh->n_vertices(); ++v) nearest = std::min(nearest, mesh->positions[v].norm());
-  EXPECT_DOUBLE_EQ(mesh->positions[one[0].keys[1]].norm(), nearest);
+  for (std::uint32_t v = 0; v < mesh->n_vertices(); ++v) nearest = std::min(nearest, mesh->positions()[v].norm());
+  EXPECT_DOUBLE_EQ(mesh->positions()[one[0].keys[1]].norm(), nearest);
   const auto two = parse_feature_line_body(json::parse(R"({"lines": [{"keys": [1, 2]}, {"keys": [3, 4]}]})"), *mesh, batch);
   EXPECT_TRUE(batch);
   EXPECT_EQ(two.size(), 2u);

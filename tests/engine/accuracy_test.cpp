@@ -22,29 +22,29 @@ using namespace featureline::testing;
 TEST(JetCurvature, SphereAndCylinderPrincipalCurvatures) {
   const auto sphere = prepare_mesh(make_icosphere(2.0, 4));
   for (std::uint32_t v = 0; v < sphere->n_vertices(); ++v) {
-    EXPECT_NEAR(sphere->curvature.k_max[v], 0.5, 0.01);
-    EXPECT_NEAR(sphere->curvature.k_min[v], 0.5, 0.01);
+    EXPECT_NEAR(sphere->curvature().k_max[v], 0.5, 0.01);
+    EXPECT_NEAR(sphere->curvature().k_min[v], 0.5, 0.01);
   }
   const auto tube = prepare_mesh(make_cylinder(1.0, 4.0, 40, 64, false));
   for (std::uint32_t v = 64 * 10; v < 64 * 30; ++v) {  // away from the open ends
-    EXPECT_NEAR(tube->curvature.k_max[v], 1.0, 0.02);
-    EXPECT_NEAR(tube->curvature.k_min[v], 0.0, 0.02);
+    EXPECT_NEAR(tube->curvature().k_max[v], 1.0, 0.02);
+    EXPECT_NEAR(tube->curvature().k_min[v], 0.0, 0.02);
   }
 }
 
 TEST(JetCurvature, NoiseEstimateAndRadiusFollowTheNoise) {
   const auto field = make_ridge_field(61, 0.2, 1, 0.3, 0.25, 0.3);
   const auto clean = prepare_mesh(field.mesh);
-  EXPECT_LT(clean->curvature.noise, 0.01);
-  EXPECT_NEAR(clean->curvature.radius, 2.0, 0.2);
+  EXPECT_LT(clean->curvature().noise, 0.01);
+  EXPECT_NEAR(clean->curvature().radius, 2.0, 0.2);
   // 10% RMS displacement in 3D is 5.8% along the normal; a 6-parameter fit over ~15 points
   // keeps about 80% of it in its residuals.
   const auto noisy = prepare_mesh(with_noise(field.mesh, 0.1, 3));
-  EXPECT_NEAR(noisy->curvature.noise, 0.045, 0.01);
-  EXPECT_GT(noisy->curvature.radius, 5.0);
+  EXPECT_NEAR(noisy->curvature().noise, 0.045, 0.01);
+  EXPECT_GT(noisy->curvature().radius, 5.0);
   PrepareOptions fixed;
   fixed.curvature.radius = 3;
-  EXPECT_EQ(prepare_mesh(with_noise(field.mesh, 0.1, 3), fixed)->curvature.radius, 3.0);
+  EXPECT_EQ(prepare_mesh(with_noise(field.mesh, 0.1, 3), fixed)->curvature().radius, 3.0);
 }
 
 TEST(JetCurvature, SlabOutlinesAreConvexCreasesAndNothingElse) {
@@ -53,13 +53,13 @@ TEST(JetCurvature, SlabOutlinesAreConvexCreasesAndNothingElse) {
     options.tessellation = tessellation;
     const auto part = make_rounded_slab(options);
     const auto mesh = prepare_mesh(part.mesh);
-    EXPECT_EQ(mesh->curvature.crease_edges, part.top_outline.size() + part.bottom_outline.size());
+    EXPECT_EQ(mesh->curvature().crease_edges, part.top_outline.size() + part.bottom_outline.size());
     const auto& outline = part.top_outline;
     for (std::size_t i = 0; i < outline.size(); ++i) {
       const auto a = outline[i], b = outline[(i + 1) % outline.size()];
-      for (auto k = mesh->neighbor_offsets[a]; k < mesh->neighbor_offsets[a + 1]; ++k)
-        if (mesh->neighbors[k] == b) {
-          EXPECT_EQ(mesh->curvature.crease[k], 1) << "edge " << a << "-" << b;
+      for (auto k = mesh->neighbor_offsets()[a]; k < mesh->neighbor_offsets()[a + 1]; ++k)
+        if (mesh->neighbors()[k] == b) {
+          EXPECT_EQ(mesh->curvature().crease[k], 1) << "edge " << a << "-" << b;
         }
     }
   }
@@ -80,16 +80,16 @@ TEST(JetCurvature, AutomaticSmoothingFollowsTheNoiseAndTheMeshsFineness) {
   // the object's size.
   const auto fine = make_ridge_field(201, 0.2, 2, 0.3, 0.25, 0.3);
   const auto noisy = prepare_mesh(with_noise(fine.mesh, 0.2 * fine.spacing / mean_edge_length(fine.mesh), 2));
-  EXPECT_GE(noisy->curvature.smoothing_passes, 16);
-  EXPECT_LE(prepare_mesh(fine.mesh)->curvature.smoothing_passes, 8);
+  EXPECT_GE(noisy->curvature().smoothing_passes, 16);
+  EXPECT_LE(prepare_mesh(fine.mesh)->curvature().smoothing_passes, 8);
   const auto coarse = make_ridge_field(51, 0.2, 2, 0.3, 0.25, 0.3);
-  EXPECT_LE(prepare_mesh(with_noise(coarse.mesh, 0.2 * coarse.spacing / mean_edge_length(coarse.mesh), 2))->curvature.smoothing_passes, 4);
+  EXPECT_LE(prepare_mesh(with_noise(coarse.mesh, 0.2 * coarse.spacing / mean_edge_length(coarse.mesh), 2))->curvature().smoothing_passes, 4);
   // A CAD part without noise keeps its field as fitted.
-  EXPECT_EQ(prepare_mesh(make_rounded_slab({}).mesh)->curvature.smoothing_passes, 0);
+  EXPECT_EQ(prepare_mesh(make_rounded_slab({}).mesh)->curvature().smoothing_passes, 0);
   // Explicit passes are applied as given; out of range is refused.
   PrepareOptions fixed;
   fixed.curvature.smoothing_passes = 3;
-  EXPECT_EQ(prepare_mesh(coarse.mesh, fixed)->curvature.smoothing_passes, 3);
+  EXPECT_EQ(prepare_mesh(coarse.mesh, fixed)->curvature().smoothing_passes, 3);
   fixed.curvature.smoothing_passes = 101;
   EXPECT_THROW(prepare_mesh(coarse.mesh, fixed), InvalidInputError);
 }
@@ -186,7 +186,7 @@ TEST(Accuracy, CleanCreasesAreFollowedExactlyThroughTightCorners) {
     const auto part = make_rounded_slab(options);
     const auto mesh = prepare_mesh(part.mesh);
     const auto& loop = part.top_outline;
-    const double unit = (mesh->positions[loop[1]] - mesh->positions[loop[0]]).norm();
+    const double unit = (mesh->positions()[loop[1]] - mesh->positions()[loop[0]]).norm();
     // Open line over a quarter of the outline, through the rounded corner at (+a, +b).
     FeatureLineRequest open;
     const std::size_t q = loop.size() / 4;
@@ -220,9 +220,9 @@ TEST(JetCurvature, EveryEdgeOfRealCadCreaseChainsIsACrease) {
     for (const auto& chain : chains)
       for (std::size_t i = 0; i < chain.edges(); ++i) {
         const auto a = chain.vertices[i], b = chain.vertices[(i + 1) % chain.vertices.size()];
-        for (auto k = mesh->neighbor_offsets[a]; k < mesh->neighbor_offsets[a + 1]; ++k)
-          if (mesh->neighbors[k] == b) {
-            EXPECT_NE(mesh->curvature.crease[k], 0) << "edge " << a << "-" << b;
+        for (auto k = mesh->neighbor_offsets()[a]; k < mesh->neighbor_offsets()[a + 1]; ++k)
+          if (mesh->neighbors()[k] == b) {
+            EXPECT_NE(mesh->curvature().crease[k], 0) << "edge " << a << "-" << b;
           }
       }
   }

@@ -72,7 +72,7 @@ TEST(Cancellation, StopsEachCuttingStage) {
   EXPECT_FALSE(cut_along_nearest_vertices(*mesh, lines, options, report, &idle).empty());
   const RemeshedCut remeshed = cut_along_lines_by_remeshing(*mesh, lines, options, report, &idle);
   EXPECT_FALSE(remeshed.cuts.empty());
-  EXPECT_GT(remeshed.triangles.size(), mesh->triangles.size());
+  EXPECT_GT(remeshed.triangles.size(), mesh->triangles().size());
 }
 
 }  // namespace

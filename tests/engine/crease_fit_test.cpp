@@ -51,7 +51,7 @@ TEST(CreaseFit, AStraightCleanRunComesBackAsItsVertices) {
   const CreaseFitResult fit = fit_noisy_crease(*mesh, chain);
   ASSERT_EQ(fit.points.size(), chain.size());
   for (std::size_t i = 0; i < chain.size(); ++i)
-    EXPECT_LT((fit.points[i].position - mesh->positions[chain[i]]).norm(), 1e-9 * part.mean_edge_length) << "point " << i;
+    EXPECT_LT((fit.points[i].position - mesh->positions()[chain[i]]).norm(), 1e-9 * part.mean_edge_length) << "point " << i;
   EXPECT_EQ(fit.kept_vertices, 0u);
   EXPECT_LT(fit.mean_shift, 1e-9);
 }
@@ -80,12 +80,12 @@ TEST(CreaseFit, OnANoisyCopyThePointsAreNearerTheTrueCreaseThanTheVertices) {
     const CreaseFitResult fit = fit_noisy_crease(*noisy, chain);
     ASSERT_EQ(fit.points.size(), chain.size());
     std::vector<Eigen::Vector3d> vertices;
-    for (auto v : chain) vertices.push_back(noisy->positions[v]);
+    for (auto v : chain) vertices.push_back(noisy->positions()[v]);
     const double before = mean_distance_to(truth, vertices), after = mean_distance_to(truth, positions(fit.points));
     EXPECT_LT(after, 0.95 * before) << "seed " << seed << ": vertices " << before << ", fitted " << after;
     // The ends are the chain's end vertices, unchanged (they are pinned keys).
-    EXPECT_EQ(fit.points.front().position, noisy->positions[chain.front()]);
-    EXPECT_EQ(fit.points.back().position, noisy->positions[chain.back()]);
+    EXPECT_EQ(fit.points.front().position, noisy->positions()[chain.front()]);
+    EXPECT_EQ(fit.points.back().position, noisy->positions()[chain.back()]);
     EXPECT_GT(fit.mean_shift, 0);
   }
 }
@@ -98,12 +98,12 @@ TEST(CreaseFit, ZeroBandwidthReturnsTheVerticesAndATinyShiftKeepsThem) {
   off.bandwidth = 0;
   const CreaseFitResult unchanged = fit_noisy_crease(*noisy, chain, off);
   ASSERT_EQ(unchanged.points.size(), chain.size());
-  for (std::size_t i = 0; i < chain.size(); ++i) EXPECT_EQ(unchanged.points[i].position, noisy->positions[chain[i]]);
+  for (std::size_t i = 0; i < chain.size(); ++i) EXPECT_EQ(unchanged.points[i].position, noisy->positions()[chain[i]]);
   CreaseFitOptions held;
   held.max_shift = 1e-9;  // every interior vertex's fit moves it further: all are kept
   const CreaseFitResult kept = fit_noisy_crease(*noisy, chain, held);
   EXPECT_EQ(kept.kept_vertices, chain.size() - 2);
-  for (std::size_t i = 0; i < chain.size(); ++i) EXPECT_EQ(kept.points[i].position, noisy->positions[chain[i]]);
+  for (std::size_t i = 0; i < chain.size(); ++i) EXPECT_EQ(kept.points[i].position, noisy->positions()[chain[i]]);
 }
 
 TEST(CreaseFit, NearestSurfacePointNearAVertexIsItsProjectionOntoTheTop) {
@@ -113,18 +113,18 @@ TEST(CreaseFit, NearestSurfacePointNearAVertexIsItsProjectionOntoTheTop) {
   std::uint32_t v = 0;
   double best = HUGE_VAL;
   for (std::uint32_t w = 0; w < mesh->n_vertices(); ++w) {
-    const auto& p = mesh->positions[w];
+    const auto& p = mesh->positions()[w];
     const double d = p.head<2>().norm();
     if (std::abs(p.z() - 0.4) < 1e-12 && d < best) best = d, v = w;
   }
-  const Eigen::Vector3d above = mesh->positions[v] + Eigen::Vector3d(0.3, -0.2, 1.0) * 0.1 * part.mean_edge_length;
+  const Eigen::Vector3d above = mesh->positions()[v] + Eigen::Vector3d(0.3, -0.2, 1.0) * 0.1 * part.mean_edge_length;
   const SurfacePoint s = nearest_surface_point_near(*mesh, v, above);
   EXPECT_NEAR(s.position.z(), 0.4, 1e-12);
   EXPECT_NEAR(s.position.x(), above.x(), 1e-9);
   EXPECT_NEAR(s.position.y(), above.y(), 1e-9);
   EXPECT_NEAR(s.barycentric[0] + s.barycentric[1] + s.barycentric[2], 1.0, 1e-12);
   Eigen::Vector3d from_barycentric = Eigen::Vector3d::Zero();
-  for (int k = 0; k < 3; ++k) from_barycentric += s.barycentric[k] * mesh->positions[mesh->triangles[s.face][std::size_t(k)]];
+  for (int k = 0; k < 3; ++k) from_barycentric += s.barycentric[k] * mesh->positions()[mesh->triangles()[s.face][std::size_t(k)]];
   EXPECT_LT((from_barycentric - s.position).norm(), 1e-12);
 }
 

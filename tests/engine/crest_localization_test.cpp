@@ -84,7 +84,7 @@ TEST(CrestLocalization, KeysSlideOntoACrestBetweenVertices) {
     const auto pinned = detect_feature_line(*mesh, request);
     for (std::size_t k = 0; k < 3; ++k) {
       EXPECT_EQ(pinned.key_moves[k], 0.0);
-      EXPECT_LT((pinned.key_points[k] - mesh->positions[request.keys[k]]).norm(), 1e-12);
+      EXPECT_LT((pinned.key_points[k] - mesh->positions()[request.keys[k]]).norm(), 1e-12);
     }
     // Moving the keys brings the whole line closer, not only its keys.
     const auto on = crest_distance(field, refined_positions(moved)), off = crest_distance(field, refined_positions(pinned));

@@ -27,7 +27,7 @@ double median(std::vector<double> v) {
 TEST(Curvature, IcosphereIsOneOverRadius) {
   for (double r : {0.5, 1.0, 7.0}) {
     const auto mesh = prepare_mesh(make_icosphere(r, 4));
-    for (double h : mesh->curvature.mean) EXPECT_NEAR(h * r, 1.0, 0.01) << "radius " << r;
+    for (double h : mesh->curvature().mean) EXPECT_NEAR(h * r, 1.0, 0.01) << "radius " << r;
   }
 }
 
@@ -36,14 +36,14 @@ TEST(Curvature, StableUnderScalingByMillion) {
   for (double s : {1e-6, 1e6}) {
     const auto mesh = prepare_mesh(scaled(make_icosphere(1.0, 3), s));
     for (std::size_t v = 0; v < unit->n_vertices(); ++v)
-      EXPECT_NEAR(mesh->curvature.mean[v] * s, unit->curvature.mean[v], 1e-9) << "scale " << s;
-    EXPECT_NEAR(mesh->curvature_scale * s, unit->curvature_scale, 1e-9);
+      EXPECT_NEAR(mesh->curvature().mean[v] * s, unit->curvature().mean[v], 1e-9) << "scale " << s;
+    EXPECT_NEAR(mesh->curvature_scale() * s, unit->curvature_scale(), 1e-9);
   }
 }
 
 TEST(Curvature, IrregularUvSphereMedianIsOneOverRadius) {
   const auto mesh = prepare_mesh(make_uv_sphere(2.0, 40, 64));
-  EXPECT_NEAR(median(mesh->curvature.mean), 0.5, 0.01);
+  EXPECT_NEAR(median(mesh->curvature().mean), 0.5, 0.01);
 }
 
 TEST(Curvature, SignFollowsOutwardNormals) {
@@ -54,21 +54,21 @@ TEST(Curvature, SignFollowsOutwardNormals) {
   PrepareOptions keep;
   keep.orient_outward = false;
   const auto kept = prepare_mesh(raw, keep);
-  for (double h : kept->curvature.mean) EXPECT_NEAR(h, -1.0, 0.02);
+  for (double h : kept->curvature().mean) EXPECT_NEAR(h, -1.0, 0.02);
   const auto turned = prepare_mesh(raw);
-  for (double h : turned->curvature.mean) EXPECT_NEAR(h, 1.0, 0.02);
+  for (double h : turned->curvature().mean) EXPECT_NEAR(h, 1.0, 0.02);
 }
 
 TEST(Curvature, CylinderSideIsOneOverTwoRadius) {
   const double r = 0.5;
   const auto mesh = prepare_mesh(make_cylinder(r, 4.0, 40, 48, false));
   // Rings away from the open ends (boundary vertices borrow from their neighbours).
-  for (std::uint32_t v = 48 * 5; v < 48 * 36; ++v) EXPECT_NEAR(mesh->curvature.mean[v], 1.0 / (2 * r), 0.02);
+  for (std::uint32_t v = 48 * 5; v < 48 * 36; ++v) EXPECT_NEAR(mesh->curvature().mean[v], 1.0 / (2 * r), 0.02);
 }
 
 TEST(Curvature, PlaneIsZero) {
   const auto mesh = prepare_mesh(make_plane_grid(20, 0.2, 3));
-  for (double h : mesh->curvature.mean) EXPECT_NEAR(h, 0.0, 1e-9);
+  for (double h : mesh->curvature().mean) EXPECT_NEAR(h, 0.0, 1e-9);
 }
 
 TEST(Curvature, SmoothingPassesReduceNoise) {
@@ -80,8 +80,8 @@ TEST(Curvature, SmoothingPassesReduceNoise) {
   }
   auto spread = [](const PreparedMesh& m) {
     double sum = 0;
-    for (double h : m.curvature.k_max) sum += (h - 1) * (h - 1);
-    return std::sqrt(sum / double(m.curvature.k_max.size()));
+    for (double h : m.curvature().k_max) sum += (h - 1) * (h - 1);
+    return std::sqrt(sum / double(m.curvature().k_max.size()));
   };
   PrepareOptions raw_field, smooth;
   raw_field.curvature.method = smooth.curvature.method = CurvatureMethod::cotangent;
@@ -92,19 +92,19 @@ TEST(Curvature, SmoothingPassesReduceNoise) {
 
 TEST(PrepareMesh, StatisticsOfKnownShapes) {
   const auto sphere = prepare_mesh(make_icosphere(1.0, 2));
-  EXPECT_EQ(sphere->statistics.components, 1u);
-  EXPECT_EQ(sphere->statistics.boundary_loops, 0u);
-  EXPECT_EQ(sphere->statistics.non_manifold_vertices, 0u);
+  EXPECT_EQ(sphere->statistics().components, 1u);
+  EXPECT_EQ(sphere->statistics().boundary_loops, 0u);
+  EXPECT_EQ(sphere->statistics().non_manifold_vertices, 0u);
   const auto tube = prepare_mesh(make_cylinder(1.0, 2.0, 4, 16, false));
-  EXPECT_EQ(tube->statistics.boundary_loops, 2u);
-  EXPECT_EQ(tube->statistics.boundary_edges, 32u);
+  EXPECT_EQ(tube->statistics().boundary_loops, 2u);
+  EXPECT_EQ(tube->statistics().boundary_edges, 32u);
   // Two spheres side by side: two components.
   auto a = make_icosphere(1.0, 1);
   const auto b = translated(make_icosphere(1.0, 1), 5, 0, 0);
   const auto offset = std::uint32_t(a.positions.size());
   a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
   for (auto t : b.triangles) a.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-  EXPECT_EQ(prepare_mesh(a)->statistics.components, 2u);
+  EXPECT_EQ(prepare_mesh(a)->statistics().components, 2u);
 }
 
 TEST(PrepareMesh, DropsRepeatedTrianglesWithoutCopyingVertices) {
@@ -117,13 +117,13 @@ TEST(PrepareMesh, DropsRepeatedTrianglesWithoutCopyingVertices) {
   raw.triangles.push_back({3, 2, 0});
   raw.source_faces = raw.triangles.size();
   const auto mesh = prepare_mesh(raw);
-  EXPECT_EQ(mesh->statistics.faces, 2u);
-  EXPECT_EQ(mesh->statistics.repeated_faces, 10001u);
-  EXPECT_EQ(mesh->statistics.duplicated_vertices, 0u);
+  EXPECT_EQ(mesh->statistics().faces, 2u);
+  EXPECT_EQ(mesh->statistics().repeated_faces, 10001u);
+  EXPECT_EQ(mesh->statistics().duplicated_vertices, 0u);
   EXPECT_EQ(mesh->n_vertices(), 4u);
-  ASSERT_EQ(mesh->warnings.size(), 1u);
-  EXPECT_NE(mesh->warnings[0].find("10001 triangle(s) over the same three vertices as an earlier one were dropped (first: input triangle 2)"),
-            std::string::npos) << mesh->warnings[0];
+  ASSERT_EQ(mesh->warnings().size(), 1u);
+  EXPECT_NE(mesh->warnings()[0].find("10001 triangle(s) over the same three vertices as an earlier one were dropped (first: input triangle 2)"),
+            std::string::npos) << mesh->warnings()[0];
 }
 
 TEST(PrepareMesh, RefusesWhatCannotFitItsMemoryBound) {
@@ -155,18 +155,18 @@ TEST(PrepareMesh, ReportsDegenerateAndNonManifoldFacesAndKeepsIds) {
   raw.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}, {2, 2, 3}};
   raw.source_faces = 4;
   const auto mesh = prepare_mesh(raw);
-  EXPECT_EQ(mesh->statistics.non_manifold_edges, 1u);
-  EXPECT_EQ(mesh->statistics.dropped_faces, 1u);
-  EXPECT_EQ(mesh->statistics.faces, 3u);
-  EXPECT_EQ(mesh->statistics.duplicated_vertices, 3u);
+  EXPECT_EQ(mesh->statistics().non_manifold_edges, 1u);
+  EXPECT_EQ(mesh->statistics().dropped_faces, 1u);
+  EXPECT_EQ(mesh->statistics().faces, 3u);
+  EXPECT_EQ(mesh->statistics().duplicated_vertices, 3u);
   // vertex 5 is unused, and vertex 4's only triangle was given copies of its corners
-  EXPECT_EQ(mesh->statistics.unreferenced_vertices, 2u);
-  EXPECT_EQ(mesh->warnings.size(), 2u);
+  EXPECT_EQ(mesh->statistics().unreferenced_vertices, 2u);
+  EXPECT_EQ(mesh->warnings().size(), 2u);
   // Input vertices keep their ids; copies are appended.
   for (std::uint32_t v = 0; v < 6; ++v)
-    EXPECT_EQ(mesh->positions[v], Eigen::Vector3d(raw.positions[v][0], raw.positions[v][1], raw.positions[v][2]));
+    EXPECT_EQ(mesh->positions()[v], Eigen::Vector3d(raw.positions[v][0], raw.positions[v][1], raw.positions[v][2]));
   EXPECT_EQ(mesh->n_vertices(), 9u);
-  EXPECT_EQ(mesh->triangles[0], (std::array<std::uint32_t, 3>{0, 1, 2}));
+  EXPECT_EQ(mesh->triangles()[0], (std::array<std::uint32_t, 3>{0, 1, 2}));
 }
 
 TEST(PrepareMesh, HourglassVertexCountsAsNonManifold) {
@@ -174,7 +174,7 @@ TEST(PrepareMesh, HourglassVertexCountsAsNonManifold) {
   RawMesh raw;
   raw.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}};
   raw.triangles = {{0, 1, 2}, {0, 3, 4}};
-  EXPECT_EQ(prepare_mesh(raw)->statistics.non_manifold_vertices, 1u);
+  EXPECT_EQ(prepare_mesh(raw)->statistics().non_manifold_vertices, 1u);
 }
 
 TEST(PrepareMesh, RejectsMeshWithoutTriangles) {
@@ -186,8 +186,8 @@ TEST(PrepareMesh, RejectsMeshWithoutTriangles) {
 
 TEST(PrepareMesh, MemoryIsReported) {
   const auto mesh = prepare_mesh(make_icosphere(1.0, 4));
-  EXPECT_GT(mesh->memory_bytes(), mesh->statistics.faces * 50);
-  EXPECT_LT(mesh->memory_bytes(), mesh->statistics.faces * 1000);
+  EXPECT_GT(mesh->memory_bytes(), mesh->statistics().faces * 50);
+  EXPECT_LT(mesh->memory_bytes(), mesh->statistics().faces * 1000);
 }
 
 }  // namespace

@@ -23,8 +23,8 @@ double path_cost(const PreparedMesh& mesh, const std::vector<std::uint32_t>& pat
                  const std::function<double(std::uint32_t, std::uint32_t)>& edge_cost) {
   double cost = 0;
   for (std::size_t i = 1; i < path.size(); ++i)
-    for (auto k = mesh.neighbor_offsets[path[i - 1]]; k < mesh.neighbor_offsets[path[i - 1] + 1]; ++k)
-      if (mesh.neighbors[k] == path[i]) cost += edge_cost(path[i - 1], k);
+    for (auto k = mesh.neighbor_offsets()[path[i - 1]]; k < mesh.neighbor_offsets()[path[i - 1] + 1]; ++k)
+      if (mesh.neighbors()[k] == path[i]) cost += edge_cost(path[i - 1], k);
   return cost;
 }
 
@@ -32,8 +32,8 @@ double path_cost(const PreparedMesh& mesh, const std::vector<std::uint32_t>& pat
 // length, featureless ones their whole length.
 auto feature_cost(const PreparedMesh& mesh) {
   return [&mesh](std::uint32_t v, std::uint32_t k) {
-    const double strength = 0.5 * (feature_strength(mesh, v, 0) + feature_strength(mesh, mesh.neighbors[k], 0));
-    return mesh.neighbor_edge_lengths[k] * (0.05 + 0.95 * (1 - strength));
+    const double strength = 0.5 * (mesh.feature_strength(v, 0) + mesh.feature_strength(mesh.neighbors()[k], 0));
+    return mesh.neighbor_edge_lengths()[k] * (0.05 + 0.95 * (1 - strength));
   };
 }
 
@@ -43,14 +43,14 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> random_pairs(const Prepared
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   for (int attempt = 0; attempt < 100 * count && int(pairs.size()) < count; ++attempt) {
     const auto a = std::uint32_t(rng() % mesh.n_vertices()), b = std::uint32_t(rng() % mesh.n_vertices());
-    if (a != b && mesh.component[a] >= 0 && mesh.component[a] == mesh.component[b]) pairs.emplace_back(a, b);
+    if (a != b && mesh.component()[a] >= 0 && mesh.component()[a] == mesh.component()[b]) pairs.emplace_back(a, b);
   }
   return pairs;
 }
 
 void expect_same_paths(const PreparedMesh& mesh, const std::string& name) {
   const auto cost = feature_cost(mesh);
-  const auto length = [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths[k]; };
+  const auto length = [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths()[k]; };
   const auto no_heuristic = [](std::uint32_t) { return 0.0; };
   for (const auto& [a, b] : random_pairs(mesh, 12)) {
     const auto goal = [b = b](std::uint32_t v) { return v == b; };
@@ -114,7 +114,7 @@ TEST(EdgeSearch, BlockedVerticesAreAvoidedExceptAtTheEnds) {
     const auto around = cheapest_path_between(*mesh, a, b, cost, &blocked, 0.05, HUGE_VAL);
     const auto plain = cheapest_edge_path(
         *mesh, a, [b = b](std::uint32_t v) { return v == b; },
-        [&](std::uint32_t v, std::uint32_t k) { return open(mesh->neighbors[k]) || mesh->neighbors[k] == b ? cost(v, k) : -1.0; },
+        [&](std::uint32_t v, std::uint32_t k) { return open(mesh->neighbors()[k]) || mesh->neighbors()[k] == b ? cost(v, k) : -1.0; },
         [](std::uint32_t) { return 0.0; }, HUGE_VAL);
     EXPECT_EQ(around, plain);
     if (first.size() > 2) {
@@ -140,10 +140,10 @@ TEST(EdgeSearch, AnEndWalledOffIsNoPath) {
   const auto mesh = prepare_mesh(field.mesh);
   const auto [a, b] = random_pairs(*mesh, 1).front();
   // Every neighbour of b blocked: no path, found at once, with and without a cost bound.
-  std::vector<std::uint32_t> wall(mesh->neighbors.begin() + mesh->neighbor_offsets[b],
-                                  mesh->neighbors.begin() + mesh->neighbor_offsets[b + 1]);
+  std::vector<std::uint32_t> wall(mesh->neighbors().begin() + mesh->neighbor_offsets()[b],
+                                  mesh->neighbors().begin() + mesh->neighbor_offsets()[b + 1]);
   std::sort(wall.begin(), wall.end());
-  const auto length = [&](std::uint32_t, std::uint32_t k) { return mesh->neighbor_edge_lengths[k]; };
+  const auto length = [&](std::uint32_t, std::uint32_t k) { return mesh->neighbor_edge_lengths()[k]; };
   EXPECT_TRUE(cheapest_path_between(*mesh, a, b, length, &wall, 1.0, HUGE_VAL).empty());
   EXPECT_TRUE(cheapest_path_between(*mesh, b, a, length, &wall, 1.0, HUGE_VAL).empty());
   EXPECT_TRUE(cheapest_path_between(*mesh, a, b, length, &wall, 1.0, 1e9).empty());

@@ -167,19 +167,19 @@ TEST(Executor, AStoppedPoolRunsParallelWorkOnItsCallers) {
 void expect_same_preparation(const PreparedMesh& a, const PreparedMesh& b) {
   // Exact equality: the parallel parts write each vertex, edge or face from one participant,
   // and nothing is summed across participants.
-  EXPECT_EQ(a.curvature.mean, b.curvature.mean);
-  EXPECT_EQ(a.curvature.k_max, b.curvature.k_max);
-  EXPECT_EQ(a.curvature.k_min, b.curvature.k_min);
-  EXPECT_EQ(a.curvature.crease, b.curvature.crease);
-  EXPECT_EQ(a.curvature.noise, b.curvature.noise);
-  EXPECT_EQ(a.curvature.radius, b.curvature.radius);
-  EXPECT_EQ(a.curvature.smoothing_passes, b.curvature.smoothing_passes);
-  EXPECT_EQ(a.face_neighbors, b.face_neighbors);
-  EXPECT_EQ(a.triangles, b.triangles);
-  EXPECT_EQ(a.statistics.non_manifold_edges, b.statistics.non_manifold_edges);
-  EXPECT_EQ(a.statistics.non_manifold_vertices, b.statistics.non_manifold_vertices);
-  EXPECT_EQ(a.curvature_scale, b.curvature_scale);
-  for (std::uint32_t v = 0; v < a.n_vertices(); v += 97) EXPECT_EQ(a.nearest_vertex(a.positions[v]), b.nearest_vertex(b.positions[v]));
+  EXPECT_EQ(a.curvature().mean, b.curvature().mean);
+  EXPECT_EQ(a.curvature().k_max, b.curvature().k_max);
+  EXPECT_EQ(a.curvature().k_min, b.curvature().k_min);
+  EXPECT_EQ(a.curvature().crease, b.curvature().crease);
+  EXPECT_EQ(a.curvature().noise, b.curvature().noise);
+  EXPECT_EQ(a.curvature().radius, b.curvature().radius);
+  EXPECT_EQ(a.curvature().smoothing_passes, b.curvature().smoothing_passes);
+  EXPECT_EQ(a.face_neighbors(), b.face_neighbors());
+  EXPECT_EQ(a.triangles(), b.triangles());
+  EXPECT_EQ(a.statistics().non_manifold_edges, b.statistics().non_manifold_edges);
+  EXPECT_EQ(a.statistics().non_manifold_vertices, b.statistics().non_manifold_vertices);
+  EXPECT_EQ(a.curvature_scale(), b.curvature_scale());
+  for (std::uint32_t v = 0; v < a.n_vertices(); v += 97) EXPECT_EQ(a.nearest_vertex(a.positions()[v]), b.nearest_vertex(b.positions()[v]));
 }
 
 TEST(Executor, PreparationEqualsTheSerialOne) {
@@ -191,8 +191,8 @@ TEST(Executor, PreparationEqualsTheSerialOne) {
   options.executor = &serial;
   const auto expected = prepare_mesh(noisy, options);
   ASSERT_GT(expected->n_vertices(), 4u * 1024);
-  ASSERT_GT(expected->curvature.smoothing_passes, 0);
-  ASSERT_GT(expected->statistics.crease_edges, 0u);
+  ASSERT_GT(expected->curvature().smoothing_passes, 0);
+  ASSERT_GT(expected->statistics().crease_edges, 0u);
 
   // On a pool from outside it, and as the server runs it: from jobs on the pool itself.
   ThreadPool pool(3, 16);

@@ -70,7 +70,7 @@ TEST(FeatureLine, ThreadScratchIsCountedWhileItsThreadLivesAndReleasedAfter) {
   worker.join();
   // At least the path search's labels (4 + 16 bytes a vertex) and the strip's stamped vertex
   // and face maps (8 bytes an element), sized to the mesh.
-  const std::size_t at_least = mesh->n_vertices() * (20 + 8) + mesh->triangles.size() * 8;
+  const std::size_t at_least = mesh->n_vertices() * (20 + 8) + mesh->triangles().size() * 8;
   EXPECT_GE(during, before + at_least);
   EXPECT_EQ(engine_scratch_bytes(), before);  // the thread's scratch went with it
 }
@@ -84,7 +84,7 @@ TEST(FeatureLine, NoRefineReturnsTheInitialLineOnVertices) {
   const auto result = detect_feature_line(*mesh, request);
   ASSERT_EQ(result.refined.size(), result.initial.vertices.size());
   for (std::size_t i = 0; i < result.refined.size(); ++i)
-    EXPECT_EQ(result.refined[i].position, mesh->positions[result.initial.vertices[i]]);
+    EXPECT_EQ(result.refined[i].position, mesh->positions()[result.initial.vertices[i]]);
   EXPECT_FALSE(result.refined_by_snake);
   EXPECT_NEAR(result.refined_length, result.initial.length, 1e-12);
 }

@@ -28,14 +28,14 @@ using namespace featureline::testing;
 
 // The crease flag of edge a -> b in the prepared mesh (0 when not an edge).
 int crease_of(const PreparedMesh& mesh, std::uint32_t a, std::uint32_t b) {
-  for (auto k = mesh.neighbor_offsets[a]; k < mesh.neighbor_offsets[a + 1]; ++k)
-    if (mesh.neighbors[k] == b) return mesh.curvature.crease[k];
+  for (auto k = mesh.neighbor_offsets()[a]; k < mesh.neighbor_offsets()[a + 1]; ++k)
+    if (mesh.neighbors()[k] == b) return mesh.curvature().crease[k];
   return 0;
 }
 
 int crease_degree(const PreparedMesh& mesh, std::uint32_t v, int sign) {
   int degree = 0;
-  for (auto k = mesh.neighbor_offsets[v]; k < mesh.neighbor_offsets[v + 1]; ++k) degree += mesh.curvature.crease[k] == sign;
+  for (auto k = mesh.neighbor_offsets()[v]; k < mesh.neighbor_offsets()[v + 1]; ++k) degree += mesh.curvature().crease[k] == sign;
   return degree;
 }
 
@@ -43,7 +43,7 @@ int crease_degree(const PreparedMesh& mesh, std::uint32_t v, int sign) {
 // exactly two such edges and turn by at most the corner angle, and whose open ends are split
 // vertices; closed chains close with a crease edge too.
 void expect_chains_follow_creases(const PreparedMesh& mesh, const FeatureSeeds& seeds, const FeatureSeedOptions& options) {
-  const auto& P = mesh.positions;
+  const auto& P = mesh.positions();
   for (std::size_t c = 0; c < seeds.crease_chains.size(); ++c) {
     const auto& chain = seeds.crease_chains[c];
     const int sign = int(chain.sign);
@@ -72,8 +72,8 @@ void expect_chains_follow_creases(const PreparedMesh& mesh, const FeatureSeeds& 
         if (degree == 2) {
           // A corner: its other crease edge turns sharply from this one.
           std::uint32_t other = 0;
-          for (auto k = mesh.neighbor_offsets[end]; k < mesh.neighbor_offsets[end + 1]; ++k)
-            if (mesh.curvature.crease[k] == sign && mesh.neighbors[k] != inner) other = mesh.neighbors[k];
+          for (auto k = mesh.neighbor_offsets()[end]; k < mesh.neighbor_offsets()[end + 1]; ++k)
+            if (mesh.curvature().crease[k] == sign && mesh.neighbors()[k] != inner) other = mesh.neighbors()[k];
           EXPECT_GT(turn_degrees(inner, end, other), options.corner_angle) << "chain " << c << " end " << end;
         }
       }
@@ -88,7 +88,7 @@ void expect_chains_follow_creases(const PreparedMesh& mesh, const FeatureSeeds& 
 TEST(FeatureSeeds, CubeHasTwelveEdgeChainsMeetingAtEightCorners) {
   const int n = 6;
   const auto mesh = prepare_mesh(make_subdivided_cube(n));
-  ASSERT_EQ(mesh->curvature.crease_edges, std::size_t(12 * n));
+  ASSERT_EQ(mesh->curvature().crease_edges, std::size_t(12 * n));
   const FeatureSeeds seeds = find_feature_seeds(*mesh);
   ASSERT_EQ(seeds.crease_chains.size(), 12u);
   std::set<std::uint32_t> ends;
@@ -173,7 +173,7 @@ TEST(FeatureSeeds, FandiskChainsAreRunsOfConsecutiveCreaseEdgesCoveringEachOnce)
   for (const auto& chain : seeds.crease_chains) {
     ridge |= chain.sign == FeatureSign::ridge;
     valley |= chain.sign == FeatureSign::valley;
-    EXPECT_GT(chain.dihedral_degrees, mesh->curvature.crease_angle * 0.5);
+    EXPECT_GT(chain.dihedral_degrees, mesh->curvature().crease_angle * 0.5);
   }
   EXPECT_TRUE(ridge && valley);  // fandisk has convex and concave creases
 
@@ -189,7 +189,7 @@ TEST(FeatureSeeds, FandiskChainsAreRunsOfConsecutiveCreaseEdgesCoveringEachOnce)
       const auto a = chain.vertices[i], b = chain.vertices[(i + 1) % chain.vertices.size()];
       EXPECT_TRUE(edges.insert({std::min(a, b), std::max(a, b)}).second) << "edge " << a << "-" << b << " twice";
     }
-  EXPECT_EQ(edges.size(), mesh->curvature.crease_edges);
+  EXPECT_EQ(edges.size(), mesh->curvature().crease_edges);
   expect_chains_follow_creases(*mesh, every, all);
   EXPECT_EQ(every.stats.short_chains, 0u);
   EXPECT_EQ(seeds.stats.crease_chains + seeds.stats.short_chains, every.stats.crease_chains);
@@ -209,7 +209,7 @@ TEST(FeatureSeeds, GaussianRidgeSeedsLieOnTheCrestAndValleysAtItsFeet) {
   ASSERT_GE(seeds.ridge_vertices.size(), 5u);
   const double spacing = 8 * field.spacing;  // the default suppression radius, about
   for (const auto& seed : seeds.ridge_vertices) {
-    const auto& p = mesh->positions[seed.vertex];
+    const auto& p = mesh->positions()[seed.vertex];
     EXPECT_LE(distance_to_crest(field, p.x(), p.y()), 1.0 * field.spacing) << "vertex " << seed.vertex;
     EXPECT_GT(seed.curvature, 0);
     EXPECT_GE(seed.strength, 1.0);
@@ -221,12 +221,12 @@ TEST(FeatureSeeds, GaussianRidgeSeedsLieOnTheCrestAndValleysAtItsFeet) {
   for (std::size_t i = 0; i < seeds.ridge_vertices.size(); ++i)
     for (std::size_t j = 0; j < i; ++j) {
       EXPECT_LE(seeds.ridge_vertices[i].strength, seeds.ridge_vertices[j].strength);
-      EXPECT_GE((mesh->positions[seeds.ridge_vertices[i].vertex] - mesh->positions[seeds.ridge_vertices[j].vertex]).norm(),
+      EXPECT_GE((mesh->positions()[seeds.ridge_vertices[i].vertex] - mesh->positions()[seeds.ridge_vertices[j].vertex]).norm(),
                 0.7 * spacing);
     }
   ASSERT_GE(seeds.valley_vertices.size(), 4u);
   for (const auto& seed : seeds.valley_vertices) {
-    const auto& p = mesh->positions[seed.vertex];
+    const auto& p = mesh->positions()[seed.vertex];
     const double d = distance_to_crest(field, p.x(), p.y());
     EXPECT_GT(d, 0.2) << "vertex " << seed.vertex;
     EXPECT_LT(d, 0.45) << "vertex " << seed.vertex;
@@ -251,7 +251,7 @@ TEST(FeatureSeeds, NoisyPlaneHasNoSeedsButANoisyRidgeKeepsItsCrest) {
       const FeatureSeeds seeds = find_feature_seeds(*noisy);
       EXPECT_GE(seeds.ridge_vertices.size(), 3u) << "noise " << noise << ", grid " << seed;
       for (const auto& s : seeds.ridge_vertices) {
-        const auto& p = noisy->positions[s.vertex];
+        const auto& p = noisy->positions()[s.vertex];
         EXPECT_LE(distance_to_crest(field, p.x(), p.y()), field.spacing)
             << "noise " << noise << ", grid " << seed << ", vertex " << s.vertex;
       }
@@ -372,7 +372,7 @@ TEST(FeatureSeeds, JsonHasTheDocumentedShapeAndFiniteNumbers) {
       const auto& c = j["crease_chains"][i];
       EXPECT_EQ(c["vertices"].size(), c["points"].size());
       EXPECT_EQ(c["vertices"][0], seeds.crease_chains[i].vertices[0]);
-      EXPECT_EQ(c["points"][0][2], mesh->positions[seeds.crease_chains[i].vertices[0]].z());
+      EXPECT_EQ(c["points"][0][2], mesh->positions()[seeds.crease_chains[i].vertices[0]].z());
       EXPECT_EQ(c["sign"], "ridge");
       EXPECT_EQ(c["edges"], seeds.crease_chains[i].edges());
       for (const char* key : {"closed", "length", "dihedral_deg"}) EXPECT_TRUE(c.contains(key)) << key;
@@ -409,12 +409,12 @@ TEST(FeatureSeeds, IgeaIsFastAndSpreadsItsSeeds) {
     for (std::size_t i = 0; i < list->size(); ++i) {
       // Clear of the scan's crease marks and holes by the default two rings, so by one at least.
       const auto v = (*list)[i].vertex;
-      EXPECT_FALSE(mesh->curvature.on_crease[v] || mesh->boundary_vertex[v]);
-      for (auto k = mesh->neighbor_offsets[v]; k < mesh->neighbor_offsets[v + 1]; ++k)
-        EXPECT_FALSE(mesh->curvature.on_crease[mesh->neighbors[k]] || mesh->boundary_vertex[mesh->neighbors[k]]) << v;
+      EXPECT_FALSE(mesh->curvature().on_crease[v] || mesh->boundary_vertex()[v]);
+      for (auto k = mesh->neighbor_offsets()[v]; k < mesh->neighbor_offsets()[v + 1]; ++k)
+        EXPECT_FALSE(mesh->curvature().on_crease[mesh->neighbors()[k]] || mesh->boundary_vertex()[mesh->neighbors()[k]]) << v;
       for (std::size_t j = 0; j < i; ++j)
-        EXPECT_GE((mesh->positions[(*list)[i].vertex] - mesh->positions[(*list)[j].vertex]).norm(),
-                  8 * local_edge_length(*mesh, (*list)[j].vertex) * (1 - 1e-12));
+        EXPECT_GE((mesh->positions()[(*list)[i].vertex] - mesh->positions()[(*list)[j].vertex]).norm(),
+                  8 * mesh->local_edge_length((*list)[j].vertex) * (1 - 1e-12));
     }
 }
 

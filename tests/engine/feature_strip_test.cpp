@@ -38,8 +38,8 @@ TEST(FeatureStrip, RingsAndAdjacencyAreConsistent) {
       if (strip.ring[v] == 0) continue;
       bool reached = false;
       const auto mesh_v = strip.vertices[v];
-      for (auto k = mesh->neighbor_offsets[mesh_v]; k < mesh->neighbor_offsets[mesh_v + 1]; ++k) {
-        const auto it = local.find(mesh->neighbors[k]);
+      for (auto k = mesh->neighbor_offsets()[mesh_v]; k < mesh->neighbor_offsets()[mesh_v + 1]; ++k) {
+        const auto it = local.find(mesh->neighbors()[k]);
         reached |= it != local.end() && strip.ring[it->second] == strip.ring[v] - 1 &&
                    strip.line_position[it->second] == strip.line_position[v];
       }
@@ -82,7 +82,7 @@ TEST(FeatureStrip, FlatteningAPlaneIsAnIsometry) {
       const auto& tri = strip.triangles[t];
       for (int k = 0; k < 3; ++k) {
         const auto a = tri[k], b = tri[(k + 1) % 3];
-        EXPECT_NEAR(flat_length(flat, a, b), (mesh->positions[strip.vertices[a]] - mesh->positions[strip.vertices[b]]).norm(), 1e-9);
+        EXPECT_NEAR(flat_length(flat, a, b), (mesh->positions()[strip.vertices[a]] - mesh->positions()[strip.vertices[b]]).norm(), 1e-9);
       }
     }
   }
@@ -107,7 +107,7 @@ TEST(FeatureStrip, ConformalLayoutKeepsANoisyWideStripInTheSnakesDomain) {
     // The line's own edges keep their lengths in both layouts.
     for (std::size_t i = 1; i < strip.line.size(); ++i)
       EXPECT_NEAR(flat_length(flat, strip.line[i - 1], strip.line[i]),
-                  (mesh->positions[line.vertices[i - 1]] - mesh->positions[line.vertices[i]]).norm(), 1e-9);
+                  (mesh->positions()[line.vertices[i - 1]] - mesh->positions()[line.vertices[i]]).norm(), 1e-9);
     dropped[flattening == StripFlattening::conformal ? 0 : 1] = flat.distorted_triangles + flat.flipped_triangles;
     if (flattening == StripFlattening::conformal) {
       EXPECT_LT(double(dropped[0]), 0.02 * double(strip.triangles.size()));
@@ -127,7 +127,7 @@ TEST(FeatureStrip, EmbeddedLineKeepsEdgeLengthsAndAnglesOnDevelopableSurface) {
   const auto line = find_initial_line(*mesh, {5 * 40 + 0, 25 * 40 + 12}, false, geodesic);
   const auto uv = embed_line(*mesh, line.vertices);
   for (std::size_t i = 1; i < uv.size(); ++i)
-    EXPECT_NEAR((uv[i] - uv[i - 1]).norm(), (mesh->positions[line.vertices[i]] - mesh->positions[line.vertices[i - 1]]).norm(), 1e-12);
+    EXPECT_NEAR((uv[i] - uv[i - 1]).norm(), (mesh->positions()[line.vertices[i]] - mesh->positions()[line.vertices[i - 1]]).norm(), 1e-12);
   StripOptions options;
   options.rings = 2;
   const auto strip = extract_feature_strip(*mesh, line.vertices, options);
@@ -137,7 +137,7 @@ TEST(FeatureStrip, EmbeddedLineKeepsEdgeLengthsAndAnglesOnDevelopableSurface) {
     const auto& tri = strip.triangles[t];
     for (int k = 0; k < 3; ++k) {
       const auto a = tri[k], b = tri[(k + 1) % 3];
-      EXPECT_NEAR(flat_length(flat, a, b), (mesh->positions[strip.vertices[a]] - mesh->positions[strip.vertices[b]]).norm(), 1e-9);
+      EXPECT_NEAR(flat_length(flat, a, b), (mesh->positions()[strip.vertices[a]] - mesh->positions()[strip.vertices[b]]).norm(), 1e-9);
     }
   }
 
@@ -148,8 +148,8 @@ TEST(FeatureStrip, EmbeddedLineKeepsEdgeLengthsAndAnglesOnDevelopableSurface) {
                                                      nearest_vertex(plane_raw, 0.8, -0.6)}, false, geodesic);
   const auto puv = embed_line(*plane, plane_line.vertices);
   for (std::size_t i = 1; i + 1 < puv.size(); ++i) {
-    const Eigen::Vector3d a = plane->positions[plane_line.vertices[i - 1]] - plane->positions[plane_line.vertices[i]];
-    const Eigen::Vector3d b = plane->positions[plane_line.vertices[i + 1]] - plane->positions[plane_line.vertices[i]];
+    const Eigen::Vector3d a = plane->positions()[plane_line.vertices[i - 1]] - plane->positions()[plane_line.vertices[i]];
+    const Eigen::Vector3d b = plane->positions()[plane_line.vertices[i + 1]] - plane->positions()[plane_line.vertices[i]];
     const Eigen::Vector2d a2 = puv[i - 1] - puv[i], b2 = puv[i + 1] - puv[i];
     const double angle3 = std::atan2(a.cross(b).z(), a.dot(b));
     const double angle2 = std::atan2(a2.x() * b2.y() - a2.y() * b2.x(), a2.dot(b2));

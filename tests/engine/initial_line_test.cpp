@@ -28,7 +28,7 @@ TEST(InitialLine, GeodesicOnPlaneIsNearlyStraight) {
   EXPECT_TRUE(is_edge_path(*mesh, line.vertices));
   EXPECT_EQ(line.vertices.front(), keys[0]);
   EXPECT_EQ(line.vertices.back(), keys[1]);
-  const double straight = (mesh->positions[keys[1]] - mesh->positions[keys[0]]).norm();
+  const double straight = (mesh->positions()[keys[1]] - mesh->positions()[keys[0]]).norm();
   EXPECT_GE(line.length, straight);
   EXPECT_LT(line.length, 1.12 * straight);  // an edge path on a jittered grid is a little longer
   EXPECT_NEAR(line.length, path_length(*mesh, line.vertices), 1e-12);
@@ -58,7 +58,7 @@ TEST(InitialLine, FeaturePathHugsSharpCreaseUnlikeGeodesicShortcut) {
   InitialLineOptions options;
   const auto line = find_initial_line(*mesh, keys, false, options);
   std::vector<Eigen::Vector3d> points;
-  for (auto v : line.vertices) points.push_back(mesh->positions[v]);
+  for (auto v : line.vertices) points.push_back(mesh->positions()[v]);
   const auto d = crest_distance(field, points);
   // Within about one grid spacing of the crease everywhere (the jet field spreads a crease that
   // crosses triangles over its fitting radius, and the 30-degree crease threshold marks some
@@ -120,16 +120,16 @@ TEST(InitialLine, FollowsFandiskCreaseChainExactly) {
   // Crease edges: dihedral angle above 30 degrees. Find a long straight-ish run of them.
   std::vector<std::vector<std::uint32_t>> crease(mesh->n_vertices());
   const auto normal = [&](std::uint32_t f) {
-    const auto& t = mesh->triangles[f];
-    const auto& p = mesh->positions;
+    const auto& t = mesh->triangles()[f];
+    const auto& p = mesh->positions();
     return Eigen::Vector3d((p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).normalized());
   };
-  for (std::uint32_t f = 0; f < mesh->triangles.size(); ++f)
+  for (std::uint32_t f = 0; f < mesh->triangles().size(); ++f)
     for (int k = 0; k < 3; ++k) {
-      const auto g = mesh->face_neighbors[f][std::size_t(k)];
+      const auto g = mesh->face_neighbors()[f][std::size_t(k)];
       if (g == UINT32_MAX || g < f) continue;  // each interior edge once
       if (std::acos(std::clamp(normal(f).dot(normal(g)), -1.0, 1.0)) > 30.0 * M_PI / 180.0) {
-        const auto a = mesh->triangles[f][std::size_t(k)], b = mesh->triangles[f][std::size_t((k + 1) % 3)];
+        const auto a = mesh->triangles()[f][std::size_t(k)], b = mesh->triangles()[f][std::size_t((k + 1) % 3)];
         crease[a].push_back(b);
         crease[b].push_back(a);
       }
@@ -188,7 +188,7 @@ TEST(InitialLine, MarchingOnAFinePartBesideACoarseOneUsesTheLocalEdgeLength) {
   raw.positions.push_back({1e4, 0.0, 0.0});
   for (std::uint32_t i = 0; i < 40; ++i) raw.triangles.push_back({offset + 40, offset + i, offset + (i + 1) % 40});
   const auto mesh = prepare_mesh(raw);
-  ASSERT_GT(mesh->statistics.mean_edge_length, 20 * local_edge_length(*mesh, 0));
+  ASSERT_GT(mesh->statistics().mean_edge_length, 20 * mesh->local_edge_length(0));
   InitialLineOptions marching;
   marching.method = InitialMethod::marching;
   marching.fallback = false;
@@ -196,7 +196,7 @@ TEST(InitialLine, MarchingOnAFinePartBesideACoarseOneUsesTheLocalEdgeLength) {
   EXPECT_TRUE(line.fallbacks.empty());
   EXPECT_GT(line.vertices.size(), 100u);
   std::vector<Eigen::Vector3d> points;
-  for (auto v : line.vertices) points.push_back(mesh->positions[v]);
+  for (auto v : line.vertices) points.push_back(mesh->positions()[v]);
   EXPECT_LT(crest_distance(fine, points).mean / fine.spacing, 3.0);  // marching's usual accuracy
 }
 

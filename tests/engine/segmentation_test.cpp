@@ -39,9 +39,9 @@ FeatureLineResult line_of(std::vector<SurfacePoint> points, bool closed) {
 // and split in their interior). Exact on the faceted surface. Assumes a single loop and no
 // vertex on the plane.
 std::vector<SurfacePoint> plane_loop(const PreparedMesh& mesh, const Eigen::Vector3d& normal, double offset) {
-  const auto& tris = mesh.triangles;
+  const auto& tris = mesh.triangles();
   std::vector<double> s(mesh.n_vertices());
-  for (std::size_t v = 0; v < s.size(); ++v) s[v] = normal.dot(mesh.positions[v]) - offset;
+  for (std::size_t v = 0; v < s.size(); ++v) s[v] = normal.dot(mesh.positions()[v]) - offset;
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> faces_of;
   for (std::uint32_t f = 0; f < tris.size(); ++f)
     for (int k = 0; k < 3; ++k) {
@@ -62,7 +62,7 @@ std::vector<SurfacePoint> plane_loop(const PreparedMesh& mesh, const Eigen::Vect
     p.barycentric = {0, 0, 0};
     p.barycentric[k] = 1 - t;
     p.barycentric[(k + 1) % 3] = t;
-    p.position = (1 - t) * mesh.positions[a] + t * mesh.positions[b];
+    p.position = (1 - t) * mesh.positions()[a] + t * mesh.positions()[b];
     return p;
   };
   std::uint32_t start = 0;
@@ -159,8 +159,8 @@ struct Capsule {
 };
 
 double area_where(const SegmentationResult& r, const PreparedMesh& mesh, int label) {
-  const auto& p = r.remeshed ? r.positions : mesh.positions;
-  const auto& t = r.remeshed ? r.triangles : mesh.triangles;
+  const auto& p = r.remeshed ? r.positions : mesh.positions();
+  const auto& t = r.remeshed ? r.triangles : mesh.triangles();
   double area = 0;
   for (std::size_t f = 0; f < t.size(); ++f)
     if (r.labels[f] == label) area += 0.5 * (p[t[f][1]] - p[t[f][0]]).cross(p[t[f][2]] - p[t[f][0]]).norm();
@@ -183,12 +183,12 @@ TEST(Segmentation, SnapCutsCapsuleAtEquatorIntoExactHalves) {
   ASSERT_EQ(r.segments.size(), 2u);
   EXPECT_FALSE(r.remeshed);
   EXPECT_TRUE(r.positions.empty());
-  ASSERT_EQ(r.labels.size(), mesh->triangles.size());
+  ASSERT_EQ(r.labels.size(), mesh->triangles().size());
   const double half = capsule_area_above(1, 2, 0);
   for (const auto& s : r.segments) {
     EXPECT_NEAR(s.area, half, 0.01 * half) << "segment " << s.label;
     EXPECT_NEAR(s.boundary_length, 2 * M_PI, 0.01 * 2 * M_PI);
-    EXPECT_EQ(s.faces, mesh->triangles.size() / 2);
+    EXPECT_EQ(s.faces, mesh->triangles().size() / 2);
     EXPECT_NEAR(s.area, area_where(r, *mesh, s.label), 1e-12);
   }
   EXPECT_NEAR(r.total_area, r.segments[0].area + r.segments[1].area, 1e-12);
@@ -239,24 +239,24 @@ TEST(Segmentation, RemeshedTiltedLoopIsExactAndValid) {
   EXPECT_NEAR(r.total_area, capsule_area(capsule.r, capsule.h), 0.01 * capsule_area(capsule.r, capsule.h));
 
   // Area preserved, original vertices kept, new ones appended, faces traced to their source.
-  const double original = mesh_area(mesh.positions, mesh.triangles);
+  const double original = mesh_area(mesh.positions(), mesh.triangles());
   EXPECT_NEAR(mesh_area(r.positions, r.triangles), original, 1e-9 * original);
   EXPECT_NEAR(r.total_area, original, 1e-9 * original);
   ASSERT_GT(r.positions.size(), mesh.n_vertices());
-  for (std::size_t v = 0; v < mesh.n_vertices(); ++v) ASSERT_EQ(r.positions[v], mesh.positions[v]) << v;
+  for (std::size_t v = 0; v < mesh.n_vertices(); ++v) ASSERT_EQ(r.positions[v], mesh.positions()[v]) << v;
   ASSERT_EQ(r.source_faces.size(), r.triangles.size());
   ASSERT_EQ(r.labels.size(), r.triangles.size());
-  std::vector<double> split_area(mesh.triangles.size(), 0);
+  std::vector<double> split_area(mesh.triangles().size(), 0);
   for (std::size_t f = 0; f < r.triangles.size(); ++f) {
     const auto& t = r.triangles[f];
     split_area[r.source_faces[f]] += 0.5 * (r.positions[t[1]] - r.positions[t[0]]).cross(r.positions[t[2]] - r.positions[t[0]]).norm();
-    if (f < mesh.triangles.size()) {
+    if (f < mesh.triangles().size()) {
       EXPECT_EQ(r.source_faces[f], f);
     }
   }
-  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-    const auto& t = mesh.triangles[f];
-    const double a = 0.5 * (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]).norm();
+  for (std::size_t f = 0; f < mesh.triangles().size(); ++f) {
+    const auto& t = mesh.triangles()[f];
+    const double a = 0.5 * (mesh.positions()[t[1]] - mesh.positions()[t[0]]).cross(mesh.positions()[t[2]] - mesh.positions()[t[0]]).norm();
     ASSERT_NEAR(split_area[f], a, 1e-12) << "face " << f;
   }
 
@@ -293,7 +293,7 @@ TEST(Segmentation, RemeshAlongDetectedLineOnVerticesAndEdges) {
     EXPECT_EQ(topo.boundary_loops, 1);
     EXPECT_EQ(topo.euler, 1);
   }
-  const double original = mesh_area(mesh->positions, mesh->triangles);
+  const double original = mesh_area(mesh->positions(), mesh->triangles());
   EXPECT_NEAR(r.total_area, original, 1e-9 * original);
 }
 
@@ -424,7 +424,7 @@ TEST(Segmentation, CrossingLoopsMeetAtNewVertices) {
     if (s.bbox_max[2] > 0.5) above += s.area;
   }
   EXPECT_NEAR(above, 2 * M_PI * 0.9, 0.01 * 2 * M_PI * 0.9);  // the sphere's zone above z = 0.1
-  const double original = mesh_area(mesh->positions, mesh->triangles);
+  const double original = mesh_area(mesh->positions(), mesh->triangles());
   EXPECT_NEAR(r.total_area, original, 1e-9 * original);
 }
 
@@ -438,16 +438,16 @@ TEST(Segmentation, TinyRegionsAreReported) {
     SurfacePoint p;
     p.face = face;
     p.barycentric = w;
-    const auto& t = mesh.triangles[face];
-    p.position = w[0] * mesh.positions[t[0]] + w[1] * mesh.positions[t[1]] + w[2] * mesh.positions[t[2]];
+    const auto& t = mesh.triangles()[face];
+    p.position = w[0] * mesh.positions()[t[0]] + w[1] * mesh.positions()[t[1]] + w[2] * mesh.positions()[t[2]];
     points.push_back(p);
   }
   SegmentationOptions options;
   options.mode = SegmentationMode::remesh;
   const auto r = segment_mesh(mesh, {line_of(points, true)}, options);
   ASSERT_EQ(r.segments.size(), 2u);
-  const auto& t = mesh.triangles[face];
-  const double face_area = 0.5 * (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]).norm();
+  const auto& t = mesh.triangles()[face];
+  const double face_area = 0.5 * (mesh.positions()[t[1]] - mesh.positions()[t[0]]).cross(mesh.positions()[t[2]] - mesh.positions()[t[0]]).norm();
   EXPECT_NEAR(r.segments[1].area, face_area / 16, 1e-12);  // the triangle between the three points
   ASSERT_EQ(r.warnings.size(), 1u);
   EXPECT_EQ(r.warnings[0].rfind("segment 1 is tiny: ", 0), 0u) << r.warnings[0];
@@ -478,7 +478,7 @@ TEST(Segmentation, BadInputIsRejected) {
   EXPECT_THROW(segment_mesh(*capsule.mesh, {}), InvalidInputError);
   auto line = line_through(*capsule.mesh, capsule.ring_keys(2), true);
   auto bad_face = line;
-  bad_face.refined[3].face = std::uint32_t(capsule.mesh->triangles.size());
+  bad_face.refined[3].face = std::uint32_t(capsule.mesh->triangles().size());
   EXPECT_THROW(segment_mesh(*capsule.mesh, {bad_face}), InvalidInputError);
   auto bad_weights = line;
   bad_weights.refined[3].barycentric = {0.5, 0.5, 0.5};
@@ -573,13 +573,13 @@ std::string computed_line_error(const PreparedMesh& mesh, const nlohmann::json& 
 TEST(Segmentation, ComputedLineErrorsNameTheField) {
   const Capsule capsule;
   const auto& mesh = *capsule.mesh;
-  const std::string faces = std::to_string(mesh.triangles.size());
+  const std::string faces = std::to_string(mesh.triangles().size());
   auto item = [](nlohmann::json face_ids, nlohmann::json barycentric) {
     return nlohmann::json{{"refined", {{"faces", std::move(face_ids)}, {"barycentric", std::move(barycentric)}}}};
   };
   const nlohmann::json w = {0.2, 0.3, 0.5};
   EXPECT_EQ(computed_line_error(mesh, item({1, 2}, {w, w})), "(accepted)");
-  EXPECT_EQ(computed_line_error(mesh, item({1, mesh.triangles.size()}, {w, w})),
+  EXPECT_EQ(computed_line_error(mesh, item({1, mesh.triangles().size()}, {w, w})),
             "lines[0].refined, point 1: face " + faces + " is out of range (the mesh has " + faces + " faces)");
   EXPECT_EQ(computed_line_error(mesh, item({1, 4294967297ULL}, {w, w})),
             "lines[0].refined, point 1: face 4294967297 is out of range (the mesh has " + faces + " faces)");
@@ -612,9 +612,9 @@ TEST(Segmentation, ComputedLineErrorsNameTheField) {
   whole["refined"]["points"] = {{9, 9, 9}, {9, 9, 9}};
   whole["refined"]["length"] = 1;
   const auto line = parse_computed_line(whole, mesh, "lines[0]");
-  const auto& t = mesh.triangles[2];
+  const auto& t = mesh.triangles()[2];
   EXPECT_EQ(line.refined[1].position,
-            Eigen::Vector3d(0.2 * mesh.positions[t[0]] + 0.3 * mesh.positions[t[1]] + 0.5 * mesh.positions[t[2]]));
+            Eigen::Vector3d(0.2 * mesh.positions()[t[0]] + 0.3 * mesh.positions()[t[1]] + 0.5 * mesh.positions()[t[2]]));
   EXPECT_THROW(parse_segmentation_request({{"lines", nlohmann::json::array()}}, mesh), InvalidInputError);
   EXPECT_THROW(parse_segmentation_request({{"mode", "snap"}}, mesh), InvalidInputError);  // "lines" is required
 }

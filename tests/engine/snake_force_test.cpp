@@ -60,7 +60,7 @@ Eigen::Vector2d towards_crest(const RidgeStrip& r, std::uint32_t local) {
 
 // Offset of strip vertex `local` from the crest, in grid spacings.
 double crest_offset(const RidgeStrip& r, std::uint32_t local) {
-  const auto& p = r.mesh->positions[r.strip.vertices[local]];
+  const auto& p = r.mesh->positions()[r.strip.vertices[local]];
   return std::abs(p.y() - kRidgeCrestOffset) / r.field.spacing;
 }
 

@@ -98,8 +98,8 @@ TEST(Snake, PinnedEndsPointsOnSurfaceAndInsideStrip) {
   const auto flat = flatten_strip(*mesh, strip, {}, LineContext{});
   const auto snake = refine_with_snake(*mesh, strip, flat);
   const auto points = map_to_surface(*mesh, strip, snake.points);
-  EXPECT_EQ(points.front().position, mesh->positions[keys[0]]);
-  EXPECT_EQ(points.back().position, mesh->positions[keys[1]]);
+  EXPECT_EQ(points.front().position, mesh->positions()[keys[0]]);
+  EXPECT_EQ(points.back().position, mesh->positions()[keys[1]]);
   const std::set<std::uint32_t> strip_faces(strip.faces.begin(), strip.faces.end());
   for (const auto& p : points) {
     EXPECT_TRUE(strip_faces.count(p.face)) << "point left the strip";
@@ -107,7 +107,7 @@ TEST(Snake, PinnedEndsPointsOnSurfaceAndInsideStrip) {
     for (double b : p.barycentric) EXPECT_GE(b, 0.0);
     // the point is the barycentric combination of its face's corners
     Eigen::Vector3d q = Eigen::Vector3d::Zero();
-    for (int k = 0; k < 3; ++k) q += p.barycentric[k] * mesh->positions[mesh->triangles[p.face][k]];
+    for (int k = 0; k < 3; ++k) q += p.barycentric[k] * mesh->positions()[mesh->triangles()[p.face][k]];
     EXPECT_LT((q - p.position).norm(), 1e-12);
   }
   EXPECT_GT(snake.iterations, 0);

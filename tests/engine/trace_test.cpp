@@ -28,7 +28,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 std::vector<Eigen::Vector3d> vertex_positions(const PreparedMesh& mesh, const std::vector<std::uint32_t>& ids) {
   std::vector<Eigen::Vector3d> out;
-  for (auto v : ids) out.push_back(mesh.positions[v]);
+  for (auto v : ids) out.push_back(mesh.positions()[v]);
   return out;
 }
 
@@ -50,7 +50,7 @@ TEST(Trace, SlabOutlineFromOneKeyIsTheWholeClosedCreaseLoop) {
     const auto mesh = prepare_mesh(part.mesh);
     // A key on the outline, and one a little inside the cap (the click missed the edge).
     const std::uint32_t on_edge = part.top_outline[5];
-    const Eigen::Vector3d inside = mesh->positions[on_edge] + Eigen::Vector3d(-0.3, 0, 0) * part.mean_edge_length;
+    const Eigen::Vector3d inside = mesh->positions()[on_edge] + Eigen::Vector3d(-0.3, 0, 0) * part.mean_edge_length;
     for (std::uint32_t key : {on_edge, vertex_at(*mesh, inside)}) {
       const TraceResult trace = trace_feature(*mesh, key);
       EXPECT_TRUE(trace.closed);
@@ -112,12 +112,12 @@ TEST(Trace, CubeEdgeStopsAtTheTwoCornersWhereThreeCreasesMeet) {
   ASSERT_FALSE(trace.closed);
   EXPECT_EQ(trace.vertices.size(), std::size_t(n + 1));
   for (auto v : trace.vertices) {
-    EXPECT_NEAR(mesh->positions[v].y(), 0, 1e-12);
-    EXPECT_NEAR(mesh->positions[v].z(), 0, 1e-12);
+    EXPECT_NEAR(mesh->positions()[v].y(), 0, 1e-12);
+    EXPECT_NEAR(mesh->positions()[v].z(), 0, 1e-12);
   }
   for (const auto& end : trace.ends) {
     EXPECT_EQ(end.reason, TraceStop::junction);
-    EXPECT_NEAR(std::abs(mesh->positions[end.vertex].x() - 0.5), 0.5, 1e-12);
+    EXPECT_NEAR(std::abs(mesh->positions()[end.vertex].x() - 0.5), 0.5, 1e-12);
   }
   ASSERT_EQ(trace.junctions.size(), 2u);
   for (const auto& junction : trace.junctions) {
@@ -146,8 +146,8 @@ TEST(Trace, TJunctionIsPassedStraightFromTheBarAndEndsTheStem) {
   const auto mesh = prepare_mesh(field.mesh);
   const TraceResult bar = trace_feature(*mesh, vertex_at(*mesh, {-0.5, 0, 0.3}));
   ASSERT_FALSE(bar.closed);
-  for (auto v : bar.vertices) EXPECT_NEAR(mesh->positions[v].y(), 0, 1e-12);
-  const double x0 = mesh->positions[bar.vertices.front()].x(), x1 = mesh->positions[bar.vertices.back()].x();
+  for (auto v : bar.vertices) EXPECT_NEAR(mesh->positions()[v].y(), 0, 1e-12);
+  const double x0 = mesh->positions()[bar.vertices.front()].x(), x1 = mesh->positions()[bar.vertices.back()].x();
   EXPECT_NEAR(std::min(x0, x1), -1, 1e-12);
   EXPECT_NEAR(std::max(x0, x1), 1, 1e-12);
   for (const auto& end : bar.ends) EXPECT_EQ(end.reason, TraceStop::boundary);
@@ -156,13 +156,13 @@ TEST(Trace, TJunctionIsPassedStraightFromTheBarAndEndsTheStem) {
   const double spacing = 2.0 / 40;
   ASSERT_FALSE(bar.junctions.empty());
   for (const auto& junction : bar.junctions) {
-    EXPECT_LE(mesh->positions[junction.vertex].head<2>().norm(), 1.01 * spacing);
+    EXPECT_LE(mesh->positions()[junction.vertex].head<2>().norm(), 1.01 * spacing);
     EXPECT_TRUE(junction.followed);
   }
 
   const TraceResult stem = trace_feature(*mesh, vertex_at(*mesh, {0, 0.5, 0.3}));
   ASSERT_FALSE(stem.closed);
-  for (auto v : stem.vertices) EXPECT_NEAR(mesh->positions[v].x(), 0, 1e-12);
+  for (auto v : stem.vertices) EXPECT_NEAR(mesh->positions()[v].x(), 0, 1e-12);
   const bool origin_first = stem.vertices.front() == origin;
   const TraceEnd& at_bar = stem.ends[origin_first ? 0 : 1];
   EXPECT_EQ(at_bar.vertex, origin);
@@ -193,7 +193,7 @@ TEST(Trace, FadingRidgeStopsWhereItFadesAndAtTheBoundaryBehind) {
   ASSERT_FALSE(trace.closed);
   EXPECT_FALSE(trace.on_crease);
   EXPECT_EQ(trace.sign, FeatureSign::ridge);
-  const auto& P = mesh->positions;
+  const auto& P = mesh->positions();
   const bool left_first = P[trace.vertices.front()].x() < P[trace.vertices.back()].x();
   const TraceEnd& left = trace.ends[left_first ? 0 : 1];
   const TraceEnd& right = trace.ends[left_first ? 1 : 0];
@@ -223,7 +223,7 @@ TEST(Trace, NoisyRidgesAndValleysStayOnTheCrest) {
       // The crest crosses the whole square: the trace runs from border to border.
       for (const auto& end : trace.ends) {
         EXPECT_EQ(end.reason, TraceStop::boundary);
-        EXPECT_NEAR(std::abs(mesh->positions[end.vertex].x()), 1, 0.05);
+        EXPECT_NEAR(std::abs(mesh->positions()[end.vertex].x()), 1, 0.05);
       }
       const CrestDistance initial = crest_distance(field, vertex_positions(*mesh, trace.vertices));
       const CrestDistance refined = crest_distance(field, refined_positions(line));

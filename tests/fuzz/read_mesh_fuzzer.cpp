@@ -40,12 +40,12 @@ PrepareOptions fuzz_prepare_options() {
 // Keys two edges apart from the first vertex that has a neighbour with another neighbour.
 std::optional<FeatureLineRequest> short_line(const PreparedMesh& mesh) {
   for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
-    for (std::uint32_t i = mesh.neighbor_offsets[v]; i < mesh.neighbor_offsets[v + 1]; ++i) {
-      const std::uint32_t u = mesh.neighbors[i];
-      for (std::uint32_t j = mesh.neighbor_offsets[u]; j < mesh.neighbor_offsets[u + 1]; ++j) {
-        if (mesh.neighbors[j] == v) continue;
+    for (std::uint32_t i = mesh.neighbor_offsets()[v]; i < mesh.neighbor_offsets()[v + 1]; ++i) {
+      const std::uint32_t u = mesh.neighbors()[i];
+      for (std::uint32_t j = mesh.neighbor_offsets()[u]; j < mesh.neighbor_offsets()[u + 1]; ++j) {
+        if (mesh.neighbors()[j] == v) continue;
         FeatureLineRequest request;
-        request.keys = {v, mesh.neighbors[j]};
+        request.keys = {v, mesh.neighbors()[j]};
         return request;
       }
     }
@@ -64,7 +64,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch (const Error&) {
     return 0;  // refused with a message: what an upload answers with 4xx
   }
-  if (mesh->n_vertices() == 0 || mesh->neighbor_offsets.size() != mesh->n_vertices() + 1) __builtin_trap();
+  if (mesh->n_vertices() == 0 || mesh->neighbor_offsets().size() != mesh->n_vertices() + 1) __builtin_trap();
   if (const auto request = short_line(*mesh)) {
     try {
       const FeatureLineResult line = detect_feature_line(*mesh, *request);

@@ -66,8 +66,8 @@ std::vector<Eigen::Vector3d> refined_positions(const FeatureLineResult& result) 
 bool is_edge_path(const PreparedMesh& mesh, const std::vector<std::uint32_t>& path) {
   for (std::size_t i = 1; i < path.size(); ++i) {
     const auto a = path[i - 1], b = path[i];
-    const auto begin = mesh.neighbors.begin() + mesh.neighbor_offsets[a];
-    const auto end = mesh.neighbors.begin() + mesh.neighbor_offsets[a + 1];
+    const auto begin = mesh.neighbors().begin() + mesh.neighbor_offsets()[a];
+    const auto end = mesh.neighbors().begin() + mesh.neighbor_offsets()[a + 1];
     if (std::find(begin, end, b) == end) return false;
   }
   return true;
