@@ -28,13 +28,13 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
-#include <future>
 #include <iostream>
 #include <malloc.h>
 #include <mutex>
 
 #include "server/byte_account.h"
 #include "server/compression.h"
+#include "server/engine_jobs.h"
 #include "server/http_errors.h"
 #include "server/metrics.h"
 #include "server/session_cache.h"
@@ -166,23 +166,6 @@ std::string utc_time(std::int64_t unix_s) {
   return stamp;
 }
 
-// Reads and prepares an upload: engine work, run on the pool (uploads and rebuilds alike), whose
-// idle threads the preparation's parallel parts use (`executor`: the pool).
-MeshSession prepare_session(std::string_view bytes, MeshFormat format, const ReadMeshOptions& limits,
-                            const Cancellation* cancel, Executor& executor) {
-  const auto t0 = Clock::now();
-  RawMesh raw = read_mesh(bytes, format, limits);
-  MeshSession s;
-  s.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  s.format = format;
-  PrepareOptions options;
-  options.max_memory_bytes = limits.memory_budget_bytes;  // nothing is prepared that the cache could never keep
-  options.executor = &executor;
-  s.mesh = prepare_mesh(std::move(raw), options, cancel);
-  s.bytes = s.mesh->memory_bytes();
-  return s;
-}
-
 }  // namespace
 
 struct FeaturelineServer::Impl {
@@ -194,6 +177,7 @@ struct FeaturelineServer::Impl {
   StoreBreaker* breaker = nullptr;  // in front of the upload store (owned by sessions); null without one
   DurableSessions sessions;         // the cache in front of the upload store (if any)
   Metrics metrics;
+  EngineJobs jobs{pool, metrics, options.deadline_s};
   std::atomic<std::uint64_t> uploads_handed_off{0};
   const Clock::time_point started = Clock::now();
   std::mutex log_mutex;
@@ -330,42 +314,6 @@ struct FeaturelineServer::Impl {
   }
 
   // ---- helpers shared by handlers -------------------------------------------------------
-  // The request's deadline as a point in time, shared by its engine work.
-  Clock::time_point request_deadline() const {
-    return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.deadline_s));
-  }
-
-  // Runs job(cancel) on the engine pool and waits for it until the request's deadline. The job's
-  // Cancellation carries that deadline, so work that is refused or times out stops at its next
-  // check instead of holding an engine thread (preparation, segmentation, mesh export).
-  template <typename Job>
-  auto run_on_pool(Job job) {
-    const auto deadline = request_deadline();
-    const auto cancel = std::make_shared<Cancellation>(deadline);
-    auto future = submit_or_503([job = std::move(job), cancel]() mutable { return job(cancel.get()); });
-    if (future.wait_until(deadline) != std::future_status::ready) {
-      cancel->cancel();
-      throw_past_deadline();
-    }
-    return future.get();  // rethrows what the job threw
-  }
-
-  // The engine pool's two refusals, worded and counted in one place.
-  template <typename Task>
-  auto submit_or_503(Task task) {
-    auto future = pool.try_submit(std::move(task));
-    if (!future) {
-      metrics.record_rejected("queue_full");
-      throw HttpError(503, "overloaded", "the server is busy; retry shortly", {{"Retry-After", "1"}});
-    }
-    return std::move(*future);
-  }
-  [[noreturn]] void throw_past_deadline() {
-    metrics.record_rejected("deadline");
-    throw HttpError(503, "deadline_exceeded", "the request took longer than the server's deadline of " + format_number(options.deadline_s) + " s",
-                    {{"Retry-After", "5"}});
-  }
-
   // A session from the cache, or rebuilt from the upload store (a 503 when the store is down).
   std::shared_ptr<const MeshSession> session_or_404(const std::string& id) {
     auto found = sessions.find(id);
@@ -411,9 +359,7 @@ struct FeaturelineServer::Impl {
 
   // Prepares a stored upload again after a cache miss (eviction, restart, another replica's id).
   MeshSession rebuild(std::shared_ptr<const StoredUpload> upload) {
-    return run_on_pool([this, upload, limits = read_limits](const Cancellation* cancel) {
-      return prepare_session(upload->bytes, upload->format, limits, cancel, pool);
-    });
+    return jobs.prepare(std::move(upload), read_limits);
   }
 
   void log_line(const std::string& text) {
@@ -469,7 +415,7 @@ struct FeaturelineServer::Impl {
     http.Get(mesh + "/mesh\\.glb", guarded("/v1/meshes/{id}/mesh.glb", [this](const auto& req, auto& res) {
       auto session = session_or_404(req.matches[1]);
       const bool compact = compact_glb_requested(req);
-      std::string glb = run_on_pool([session, compact](const Cancellation*) {
+      std::string glb = jobs.run([session, compact](const Cancellation*) {
         return compact ? prepared_mesh_to_compact_glb(*session->mesh) : feature_line_to_glb(*session->mesh, {}, true);
       });
       res.set_header("Cache-Control", "private, max-age=3600");
@@ -480,7 +426,7 @@ struct FeaturelineServer::Impl {
       // Crease chains and ridge/valley vertices to pick keys from; options as query parameters.
       auto session = session_or_404(req.matches[1]);
       const FeatureSeedOptions seed_options = parse_feature_seed_query({req.params.begin(), req.params.end()});
-      write_json(res, 200, run_on_pool([session, seed_options](const Cancellation* cancel) {
+      write_json(res, 200, jobs.run([session, seed_options](const Cancellation* cancel) {
         return feature_seeds_to_json(*session->mesh, find_feature_seeds(*session->mesh, seed_options, cancel));
       }));
     }));
@@ -739,10 +685,7 @@ struct FeaturelineServer::Impl {
     upload->uploaded_at_unix_s = std::int64_t(std::time(nullptr));
     if (hand_off_requested(req)) return hand_off(*upload, res);
 
-    MeshSession session = run_on_pool([this, upload = std::shared_ptr<const StoredUpload>(upload), limits = read_limits](
-                                          const Cancellation* cancel) {
-      return prepare_session(upload->bytes, upload->format, limits, cancel, pool);
-    });
+    MeshSession session = jobs.prepare(upload, read_limits);
     const std::size_t needed = session.bytes;
     auto stored = sessions.create(std::move(session), *upload);  // a full or unreachable store: 503, nothing kept
     if (!stored)
@@ -815,51 +758,6 @@ struct FeaturelineServer::Impl {
       return;
     }
     write_json(res, 200, {{"vertices", h.size()}, {"curvature", h}});
-  }
-
-  // Lines run in parallel on the pool; each job shares the immutable mesh.
-  // The batch shares one Cancellation with the request's deadline: work stops when the deadline
-  // passes, and when the batch is refused or a line fails, its other lines stop too instead of
-  // holding workers for an answer nobody will read.
-  // Where a batch's time went: waiting for an engine thread (the longest wait of its lines) and
-  // computing (the lines' engine time, summed). Answered as a Server-Timing header, so a client
-  // tells a busy server from an expensive request.
-  struct BatchTiming {
-    double queue_ms = 0, engine_ms = 0;
-  };
-
-  std::vector<FeatureLineResult> run_lines(const std::shared_ptr<const MeshSession>& session,
-                                           const std::vector<FeatureLineRequest>& lines, BatchTiming* timing = nullptr) {
-    const auto deadline = request_deadline();
-    const auto cancel = std::make_shared<Cancellation>(deadline);
-    struct CancelUnlessDone {
-      std::shared_ptr<Cancellation> cancel;
-      bool done = false;
-      ~CancelUnlessDone() {
-        if (!done) cancel->cancel();
-      }
-    } guard{cancel};
-    using Timed = std::pair<FeatureLineResult, double>;  // the line, and its wait for a thread in ms
-    std::vector<std::future<Timed>> futures;
-    for (auto line : lines) {
-      line.cancel = cancel.get();
-      futures.push_back(submit_or_503([session, line, cancel, queued = Clock::now()] {
-        const double waited = std::chrono::duration<double, std::milli>(Clock::now() - queued).count();
-        return Timed{detect_feature_line(*session->mesh, line), waited};
-      }));
-    }
-    std::vector<FeatureLineResult> results;
-    for (auto& f : futures) {
-      if (f.wait_until(deadline) != std::future_status::ready) throw_past_deadline();
-      auto [result, waited] = f.get();
-      if (timing != nullptr) {
-        timing->queue_ms = std::max(timing->queue_ms, waited);
-        timing->engine_ms += result.timings.total_ms;
-      }
-      results.push_back(std::move(result));
-    }
-    guard.done = true;
-    return results;
   }
 
   // The JSON body of a POST, checked for type and size.
@@ -953,9 +851,9 @@ struct FeaturelineServer::Impl {
     const SegmentationOptions segmentation_options = request.options;
     // Items are line requests (detected here) or lines the client already has (computed once).
     std::vector<FeatureLineResult> detected;
-    if (!request.requests.empty()) detected = run_lines(session, request.requests);
+    if (!request.requests.empty()) detected = jobs.run_lines(session, request.requests);
     const auto results = std::move(request).lines_with(std::move(detected));
-    const SegmentationResult segments = run_on_pool([session, results, segmentation_options](const Cancellation* cancel) {
+    const SegmentationResult segments = jobs.run([session, results, segmentation_options](const Cancellation* cancel) {
       return segment_mesh(*session->mesh, results, segmentation_options, cancel);
     });
     if (format == ExportFormat::json) write_json(res, 200, segmentation_to_json(segments, segmentation_options.mode));
@@ -971,7 +869,7 @@ struct FeaturelineServer::Impl {
     request_body.text = std::string();  // the keys are all a line needs from here on
     request_body.held.hold(0);
     BatchTiming timing;
-    const std::vector<FeatureLineResult> results = run_lines(session, lines, &timing);
+    const std::vector<FeatureLineResult> results = jobs.run_lines(session, lines, &timing);
     char server_timing[96];
     std::snprintf(server_timing, sizeof server_timing, "queue;dur=%.3f, engine;dur=%.3f", timing.queue_ms, timing.engine_ms);
     res.set_header("Server-Timing", server_timing);
