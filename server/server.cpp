@@ -34,6 +34,7 @@
 
 #include "server/byte_account.h"
 #include "server/compression.h"
+#include "server/content_negotiation.h"
 #include "server/engine_jobs.h"
 #include "server/http_errors.h"
 #include "server/metrics.h"
@@ -76,33 +77,6 @@ const char* method_label(const std::string& method) {
   for (const char* known : {"GET", "POST", "DELETE", "OPTIONS", "HEAD", "PUT", "PATCH"})
     if (method == known) return known;
   return "other";
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
-
-// The media type without parameters, lower case ("Model/OBJ; charset=x" -> "model/obj").
-std::string media_type(const std::string& header) {
-  std::string type = lower(header.substr(0, header.find(';')));
-  while (!type.empty() && std::isspace((unsigned char)type.back())) type.pop_back();
-  while (!type.empty() && std::isspace((unsigned char)type.front())) type.erase(type.begin());
-  return type;
-}
-
-bool accepts(const httplib::Request& req, const std::string& type) {
-  return lower(req.get_header_value("Accept")).find(type) != std::string::npos;
-}
-
-// mesh.glb?compact=1: the quantised download the page reads (KHR_mesh_quantization); the float
-// GLB stays the default for other clients. A query, not Accept: both are model/gltf-binary.
-bool compact_glb_requested(const httplib::Request& req) {
-  if (!req.has_param("compact")) return false;
-  const std::string value = lower(req.get_param_value("compact"));
-  if (value == "1" || value == "true") return true;
-  if (value == "0" || value == "false") return false;
-  throw HttpError(400, "invalid_request", "compact must be 1, true, 0 or false");
 }
 
 void write_error(httplib::Response& res, const ErrorReply& error) {
@@ -530,8 +504,7 @@ struct FeaturelineServer::Impl {
   // What an upload's head says, checked before its body is read.
   struct UploadHead {
     std::size_t length = 0;
-    std::optional<MeshFormat> format;  ///< from ?format= or Content-Type; else sniffed from the body
-    bool files = false;                ///< multipart/form-data: a .gltf and the files it names
+    UploadType type;
   };
 
   // Refuses an upload from its head alone (throws HttpError). Transfer-Encoding, Content-Encoding,
@@ -551,26 +524,11 @@ struct FeaturelineServer::Impl {
     if (head.length > (options.max_upload_mb << 20))
       refuse(413, "payload_too_large", "the upload is " + std::to_string(head.length) + " bytes; this server accepts at most " +
                                            std::to_string(options.max_upload_mb) + " MiB");
-    if (req.has_param("format")) {
-      head.format = parse_mesh_format(req.get_param_value("format"));
-      if (!head.format) refuse(415, "unsupported_format", "unknown format \"" + quote_client_text(req.get_param_value("format")) +
-                                                              "\"; use one of " + supported_formats());
-    } else if (req.has_header("Content-Type")) {
-      const std::string type = media_type(req.get_header_value("Content-Type"));
-      static const std::map<std::string, MeshFormat> by_type = {
-          {"model/obj", MeshFormat::obj},        {"model/stl", MeshFormat::stl},
-          {"model/x-off", MeshFormat::off},      {"application/x-ply", MeshFormat::ply},
-          {"model/gltf-binary", MeshFormat::glb}, {"model/gltf+json", MeshFormat::gltf},
-          {"application/x-draco", MeshFormat::drc}};
-      if (auto it = by_type.find(type); it != by_type.end()) head.format = it->second;
-      else if (type == "application/x-www-form-urlencoded")
-        refuse(415, "unsupported_format",
-               "the body was sent as a form (curl -d does that); send it as application/octet-stream or a model/* type, "
-               "e.g. curl --data-binary @mesh.obj -H 'Content-Type: application/octet-stream'");
-      else if (type == "multipart/form-data")
-        head.files = true;
-      else if (type != "application/octet-stream" && !type.empty())
-        refuse(415, "unsupported_format", "unsupported Content-Type \"" + quote_client_text(type) + "\"");
+    try {
+      head.type = upload_type(req);
+    } catch (const HttpError& e) {
+      metrics.record_rejected(e.code());
+      throw;
     }
     return head;
   }
@@ -647,20 +605,20 @@ struct FeaturelineServer::Impl {
     // the connection (server/transport.cpp), so its bytes are never parsed as a next request.
     const UploadHead head = check_upload_head(req);
     const std::size_t length = head.length;
-    std::optional<MeshFormat> format = head.format;
+    std::optional<MeshFormat> format = head.type.format;
     ByteHold buffered(upload_buffer);
     if (!buffered.hold(std::min(length, kUploadChunkBytes))) throw upload_buffer_full();
 
     // The bytes are kept as uploaded: the store holds them so the mesh can be prepared again.
     auto upload = std::make_shared<StoredUpload>();
-    if (head.files) {
+    if (head.type.files) {
       upload->bytes = read_gltf_files(reader, length, buffered, body_read);
       format = upload->bytes.rfind("glTF", 0) == 0 ? MeshFormat::glb : MeshFormat::gltf;
     }
     std::string& body = upload->bytes;
     body.reserve(std::min(length, kUploadChunkBytes));
     bool buffer_full = false;
-    const bool complete = head.files || reader([&](const char* data, std::size_t size) {
+    const bool complete = head.type.files || reader([&](const char* data, std::size_t size) {
       if (body.size() + size > length) return false;
       // Grown as bytes arrive, and held by capacity: what the string has really allocated.
       if (body.size() + size > body.capacity()) {
@@ -672,16 +630,12 @@ struct FeaturelineServer::Impl {
       return true;
     });
     if (buffer_full) throw upload_buffer_full();
-    if (!head.files) body_read = complete && body.size() == length;
+    if (!head.type.files) body_read = complete && body.size() == length;
     if (!body_read) {
       throw HttpError(400, "malformed_mesh", "the upload ended after " + std::to_string(body.size()) + " of " +
                                                  std::to_string(length) + " bytes");
     }
-    if (!format) format = sniff_mesh_format(body);
-    if (!format)
-      throw HttpError(415, "unsupported_format",
-                      "could not tell the mesh format from its bytes; pass ?format=obj|off|ply|stl|glb|gltf|drc");
-    upload->format = *format;
+    upload->format = format ? *format : sniff_upload_format(body);
     upload->uploaded_at_unix_s = std::int64_t(std::time(nullptr));
     if (hand_off_requested(req)) return hand_off(*upload, res);
 
@@ -816,32 +770,13 @@ struct FeaturelineServer::Impl {
 
   // The body as a JSON object, its DOM's size checked against the text's and held as well.
   json json_body(const httplib::Request& req, JsonBody& body) {
-    const std::string type = media_type(req.get_header_value("Content-Type"));
-    if (!type.empty() && type != "application/json")
-      throw HttpError(415, "unsupported_format",
-                      "send the request as application/json (curl: -H 'Content-Type: application/json'), not \"" + type + "\"");
+    require_json_body(req);
     const JsonShape shape = measure_json(body.text);
     check_json_shape(body.text.size(), shape);
     if (!body.held.hold(body.text.capacity() + shape.dom_bytes())) throw json_memory_full();
     json parsed = json::parse(body.text);
     if (!parsed.is_object()) throw InvalidInputError("the request body must be a JSON object");
     return parsed;
-  }
-
-  // The answer's format: ?format= (a name of api/export_formats.h) wins over Accept (the formats
-  // with a type of their own); JSON otherwise. \throw HttpError 400 for a format `content` lacks
-  static ExportFormat answer_format(const httplib::Request& req, ExportContent content) {
-    if (req.has_param("format")) {
-      const auto format = parse_export_format(req.get_param_value("format"));
-      if (!format || !can_export(*format, content))
-        throw HttpError(400, "invalid_request", "format must be " + export_format_names(content));
-      return *format;
-    }
-    for (const auto& row : export_format_table()) {
-      const bool own_type = std::string_view(row.mime_type) != "text/plain" && row.format != ExportFormat::json;
-      if (own_type && can_export(row.format, content) && accepts(req, row.mime_type)) return row.format;
-    }
-    return ExportFormat::json;
   }
 
   void segmentation(const httplib::Request& req, JsonBody& request_body, httplib::Response& res) {
