@@ -37,10 +37,12 @@
 #include "server/content_negotiation.h"
 #include "server/engine_jobs.h"
 #include "server/http_errors.h"
+#include "server/json_body.h"
 #include "server/metrics.h"
 #include "server/session_cache.h"
 #include "server/store_breaker.h"
 #include "server/transport.h"
+#include "server/upload_body.h"
 #include "server/upload_store.h"
 #include "server/web_assets.h"
 #include "server/work_pool.h"
@@ -52,10 +54,6 @@ using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
 constexpr std::size_t kMaxJsonBytes = RequestLimits::max_json_bytes;
-// Upload buffers start at this and double as bytes arrive (held against the upload budget).
-constexpr std::size_t kUploadChunkBytes = std::size_t(1) << 20;
-// A .gltf and its .bin files rarely number more than a few; every part costs a string.
-constexpr std::size_t kMaxUploadFiles = 64;
 // The front (deploy/nginx.conf.template) names what it asks of a replica in this header:
 // "hand-off" on an upload (store it and hand it back), "uploaded" when it sends that upload on
 // to the replica its id belongs to. The front sets or clears it on every request it forwards.
@@ -116,6 +114,12 @@ ReadMeshOptions upload_read_limits(const ServerOptions& o) {
   return limits;
 }
 
+// All upload bodies being received at once (4 uploads of 200 MB had reached 880 MB of resident
+// memory before they were bounded).
+std::size_t upload_buffer_bytes(const ServerOptions& o) {
+  return o.upload_buffer_mb != 0 ? o.upload_buffer_mb << 20 : 2 * (o.max_upload_mb << 20);
+}
+
 // The store's idle clock is restarted at most this often per session: a quarter of the TTL, at
 // most a minute. The store keeps uploads this much longer than the cache keeps prepared meshes.
 std::chrono::seconds store_touch_interval(const ServerOptions& o) { return std::chrono::seconds(std::clamp(o.ttl_s / 4, 1, 60)); }
@@ -152,6 +156,9 @@ struct FeaturelineServer::Impl {
   DurableSessions sessions;         // the cache in front of the upload store (if any)
   Metrics metrics;
   EngineJobs jobs{pool, metrics, options.deadline_s};
+  // Bodies being received or parsed sit outside the cache budget, each kind within its own.
+  UploadBodies uploads{options.max_upload_mb << 20, upload_buffer_bytes(options), metrics};
+  JsonBodies json_bodies{JsonBodies::budget_for(options.cache_mb << 20), metrics};
   std::atomic<std::uint64_t> uploads_handed_off{0};
   const Clock::time_point started = Clock::now();
   std::mutex log_mutex;
@@ -198,8 +205,8 @@ struct FeaturelineServer::Impl {
   std::size_t bytes_at_last_trim = 0;
   void return_freed_memory() {
     const std::size_t bytes = cache.stats().bytes;
-    const std::size_t bodies_peak = json_memory.take_peak() + upload_buffer.take_peak();
-    const std::size_t bodies_now = json_memory.used() + upload_buffer.used();
+    const std::size_t bodies_peak = json_bodies.memory().take_peak() + uploads.buffer().take_peak();
+    const std::size_t bodies_now = json_bodies.memory().used() + uploads.buffer().used();
     constexpr std::size_t kWorthTrimming = std::size_t(16) << 20;
     if (bytes < bytes_at_last_trim || bodies_peak > bodies_now + kWorthTrimming) malloc_trim(0);
     bytes_at_last_trim = bytes;
@@ -501,60 +508,12 @@ struct FeaturelineServer::Impl {
   }
 
   // ---- handlers ----------------------------------------------------------------------------
-  // What an upload's head says, checked before its body is read.
-  struct UploadHead {
-    std::size_t length = 0;
-    UploadType type;
-  };
-
-  // Refuses an upload from its head alone (throws HttpError). Transfer-Encoding, Content-Encoding,
-  // a repeated or oversized Content-Length never get here: the transport refuses them.
-  UploadHead check_upload_head(const httplib::Request& req) {
-    auto refuse = [&](int status, const char* code, const std::string& message) {
-      metrics.record_rejected(code);
-      throw HttpError(status, code, message);
-    };
-    UploadHead head;
-    if (!req.has_header("Content-Length")) refuse(411, "length_required", "the upload needs a Content-Length header");
-    const std::string length_text = req.get_header_value("Content-Length");
-    if (length_text.empty() || length_text.size() > 15 || length_text.find_first_not_of("0123456789") != std::string::npos)
-      refuse(400, "invalid_request", "Content-Length is not a number");
-    head.length = std::stoull(length_text);
-    if (head.length == 0) refuse(400, "malformed_mesh", "the upload is empty");
-    if (head.length > (options.max_upload_mb << 20))
-      refuse(413, "payload_too_large", "the upload is " + std::to_string(head.length) + " bytes; this server accepts at most " +
-                                           std::to_string(options.max_upload_mb) + " MiB");
-    try {
-      head.type = upload_type(req);
-    } catch (const HttpError& e) {
-      metrics.record_rejected(e.code());
-      throw;
-    }
-    return head;
-  }
-
-  // Upload bodies being received sit outside the cache budget: their total is bounded here, by
-  // the bytes each has received (not what it declares), so a few slow large uploads cannot hold
-  // the memory or the budget (4 uploads of 200 MB had reached 880 MB of resident memory).
-  ByteAccount upload_buffer{options.upload_buffer_mb != 0 ? options.upload_buffer_mb << 20 : 2 * (options.max_upload_mb << 20)};
-  HttpError upload_buffer_full() {
-    metrics.record_rejected("upload_buffer_full");
-    return HttpError(503, "overloaded", "uploads being received already hold " + std::to_string(upload_buffer.used() >> 20) +
-                                            " MiB of the " + std::to_string(upload_buffer.capacity() >> 20) +
-                                            " MiB the server buffers; retry shortly",
-                     {{"Retry-After", "5"}});
-  }
-
-  // Parsed JSON bodies share one budget too: a body's DOM is bounded by its size
-  // (api/json_budget.h), and all of them at once by this account.
-  ByteAccount json_memory{std::max<std::size_t>(std::size_t(64) << 20, (options.cache_mb << 20) / 4)};
-
   // Expect: 100-continue: an upload that will be refused gets its refusal instead of 100 Continue
   // (the client then never sends the body, and the transport closes the connection).
   int expect_continue(const httplib::Request& req, httplib::Response& res) {
     if (req.method != "POST" || req.path != "/v1/meshes") return 100;
     try {
-      check_upload_head(req);
+      uploads.check_head(req);
       return 100;
     } catch (...) {
       write_error(res, error_reply(std::current_exception()));
@@ -563,80 +522,12 @@ struct FeaturelineServer::Impl {
     }
   }
 
-  // A .gltf posted with the files it names, as multipart/form-data (a browser's FormData, curl
-  // -F): the parts are read within the upload's buffer hold, then packed into one GLB (engine
-  // pack_gltf_files), which is what is stored and prepared, so the session can be rebuilt from
-  // one blob like any upload.
-  std::string read_gltf_files(const httplib::ContentReader& reader, std::size_t length, ByteHold& buffered, bool& body_read) {
-    std::vector<std::pair<std::string, std::string>> parts;
-    std::size_t received = 0;
-    bool buffer_full = false, too_many = false;
-    const bool complete = reader(
-        [&](const httplib::MultipartFormData& part) {
-          if (parts.size() >= kMaxUploadFiles) return !(too_many = true);
-          parts.emplace_back(part.filename.empty() ? part.name : part.filename, std::string());
-          return true;
-        },
-        [&](const char* data, std::size_t size) {
-          received += size;
-          if (received > length || !buffered.hold(received)) return !(buffer_full = true);
-          parts.back().second.append(data, size);
-          return true;
-        });
-    if (buffer_full) throw upload_buffer_full();
-    if (too_many) throw HttpError(400, "malformed_mesh", "an upload of files has at most " + std::to_string(kMaxUploadFiles) + " parts");
-    body_read = complete;
-    if (!complete) throw HttpError(400, "malformed_mesh", "the multipart upload is malformed or ended early");
-    auto is_gltf = [](const std::string& name) {
-      return name.size() > 5 && std::equal(name.end() - 5, name.end(), ".gltf", [](char a, char b) { return std::tolower(a) == b; });
-    };
-    const auto documents = std::count_if(parts.begin(), parts.end(), [&](const auto& p) { return is_gltf(p.first); });
-    if (documents != 1)
-      throw HttpError(415, "unsupported_format", "an upload of files takes one .gltf file and the files it names (" +
-                                                     std::to_string(documents) + " .gltf files were sent)");
-    const auto document = std::find_if(parts.begin(), parts.end(), [&](const auto& p) { return is_gltf(p.first); });
-    const std::string gltf = std::move(document->second);
-    parts.erase(document);
-    return pack_gltf_files(gltf, parts);
-  }
-
   void upload(const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader, bool& body_read) {
     // The head is checked before the body is read. Whatever is refused, a body left unread ends
     // the connection (server/transport.cpp), so its bytes are never parsed as a next request.
-    const UploadHead head = check_upload_head(req);
-    const std::size_t length = head.length;
-    std::optional<MeshFormat> format = head.type.format;
-    ByteHold buffered(upload_buffer);
-    if (!buffered.hold(std::min(length, kUploadChunkBytes))) throw upload_buffer_full();
-
-    // The bytes are kept as uploaded: the store holds them so the mesh can be prepared again.
-    auto upload = std::make_shared<StoredUpload>();
-    if (head.type.files) {
-      upload->bytes = read_gltf_files(reader, length, buffered, body_read);
-      format = upload->bytes.rfind("glTF", 0) == 0 ? MeshFormat::glb : MeshFormat::gltf;
-    }
-    std::string& body = upload->bytes;
-    body.reserve(std::min(length, kUploadChunkBytes));
-    bool buffer_full = false;
-    const bool complete = head.type.files || reader([&](const char* data, std::size_t size) {
-      if (body.size() + size > length) return false;
-      // Grown as bytes arrive, and held by capacity: what the string has really allocated.
-      if (body.size() + size > body.capacity()) {
-        const std::size_t capacity = std::min(length, std::max(body.size() + size, 2 * body.capacity()));
-        if (!buffered.hold(capacity)) return !(buffer_full = true);
-        body.reserve(capacity);
-      }
-      body.append(data, size);
-      return true;
-    });
-    if (buffer_full) throw upload_buffer_full();
-    if (!head.type.files) body_read = complete && body.size() == length;
-    if (!body_read) {
-      throw HttpError(400, "malformed_mesh", "the upload ended after " + std::to_string(body.size()) + " of " +
-                                                 std::to_string(length) + " bytes");
-    }
-    upload->format = format ? *format : sniff_upload_format(body);
-    upload->uploaded_at_unix_s = std::int64_t(std::time(nullptr));
+    const UploadHead head = uploads.check_head(req);
+    ByteHold held(uploads.buffer());
+    const std::shared_ptr<StoredUpload> upload = uploads.read(head, reader, held, body_read);
     if (hand_off_requested(req)) return hand_off(*upload, res);
 
     MeshSession session = jobs.prepare(upload, read_limits);
@@ -714,15 +605,6 @@ struct FeaturelineServer::Impl {
     write_json(res, 200, {{"vertices", h.size()}, {"curvature", h}});
   }
 
-  // The JSON body of a POST, checked for type and size.
-  // A JSON request body: its text and its DOM counted against json_memory while the request
-  // holds them, so concurrent bodies share one bound.
-  struct JsonBody {
-    explicit JsonBody(ByteAccount& account) : held(account) {}
-    std::string text;
-    ByteHold held;
-  };
-
   // A POST route with a JSON body: the body is read here, by bytes received, within 4 MiB and
   // the shared budget; a body left unread closes the connection (the transport does), so say so.
   template <typename Handler>
@@ -731,8 +613,9 @@ struct FeaturelineServer::Impl {
       request_route = route;
       bool body_read = false;
       try {
-        JsonBody body(json_memory);
-        body_read = read_json_text(reader, body);
+        JsonBody body(json_bodies.memory());
+        json_bodies.read(reader, body);
+        body_read = true;
         handler(req, body, res);
       } catch (...) {
         write_error(res, error_reply(std::current_exception()));
@@ -741,48 +624,10 @@ struct FeaturelineServer::Impl {
     });
   }
 
-  HttpError json_memory_full() {
-    metrics.record_rejected("json_memory_full");
-    return HttpError(503, "overloaded", "request bodies being parsed already hold " + std::to_string(json_memory.used() >> 20) +
-                                            " MiB of the " + std::to_string(json_memory.capacity() >> 20) + " MiB they may; retry shortly",
-                     {{"Retry-After", "1"}});
-  }
-
-  // Reads the body into body.text; true when it was read whole. \throw HttpError 413, 503
-  bool read_json_text(const httplib::ContentReader& reader, JsonBody& body) {
-    bool too_large = false, full = false;
-    const bool complete = reader([&](const char* data, std::size_t size) {
-      if (body.text.size() + size > kMaxJsonBytes) return !(too_large = true);
-      if (body.text.size() + size > body.text.capacity()) {
-        const std::size_t capacity = std::min(kMaxJsonBytes, std::max(body.text.size() + size, 2 * body.text.capacity()));
-        if (!body.held.hold(capacity)) return !(full = true);
-        body.text.reserve(capacity);
-      }
-      body.text.append(data, size);
-      return true;
-    });
-    if (too_large)
-      throw HttpError(413, "payload_too_large", "the request body exceeds " + std::to_string(kMaxJsonBytes >> 20) + " MiB");
-    if (full) throw json_memory_full();
-    if (!complete) throw HttpError(400, "invalid_request", "the request body ended early");
-    return true;
-  }
-
-  // The body as a JSON object, its DOM's size checked against the text's and held as well.
-  json json_body(const httplib::Request& req, JsonBody& body) {
-    require_json_body(req);
-    const JsonShape shape = measure_json(body.text);
-    check_json_shape(body.text.size(), shape);
-    if (!body.held.hold(body.text.capacity() + shape.dom_bytes())) throw json_memory_full();
-    json parsed = json::parse(body.text);
-    if (!parsed.is_object()) throw InvalidInputError("the request body must be a JSON object");
-    return parsed;
-  }
-
   void segmentation(const httplib::Request& req, JsonBody& request_body, httplib::Response& res) {
     auto session = session_or_404(req.matches[1]);
     const ExportFormat format = answer_format(req, ExportContent::segmentation);
-    SegmentationRequest request = parse_segmentation_request(json_body(req, request_body), *session->mesh);
+    SegmentationRequest request = parse_segmentation_request(json_bodies.parse(req, request_body), *session->mesh);
     const SegmentationOptions segmentation_options = request.options;
     // Items are line requests (detected here) or lines the client already has (computed once).
     std::vector<FeatureLineResult> detected;
@@ -800,9 +645,8 @@ struct FeaturelineServer::Impl {
     auto session = session_or_404(req.matches[1]);
     const ExportFormat answer = answer_format(req, ExportContent::lines);
     bool batch = false;
-    const std::vector<FeatureLineRequest> lines = parse_feature_line_body(json_body(req, request_body), *session->mesh, batch);
-    request_body.text = std::string();  // the keys are all a line needs from here on
-    request_body.held.hold(0);
+    const std::vector<FeatureLineRequest> lines = parse_feature_line_body(json_bodies.parse(req, request_body), *session->mesh, batch);
+    request_body.release();  // the keys are all a line needs from here on
     BatchTiming timing;
     const std::vector<FeatureLineResult> results = jobs.run_lines(session, lines, &timing);
     char server_timing[96];
