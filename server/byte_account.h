@@ -61,6 +61,11 @@ class ByteHold {
   std::size_t bytes_ = 0;
 };
 
+/// "N MiB of the M MiB": how much of an account is in use, for the refusal when it is spent.
+inline std::string used_of_capacity(const ByteAccount& account) {
+  return std::to_string(account.used() >> 20) + " MiB of the " + std::to_string(account.capacity() >> 20) + " MiB";
+}
+
 /// What append_held did with a chunk of a body.
 enum class Appended { ok, past_limit, account_full };
 

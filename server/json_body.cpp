@@ -48,8 +48,7 @@ nlohmann::json JsonBodies::parse(const httplib::Request& req, JsonBody& body) {
 
 HttpError JsonBodies::memory_full() {
   metrics_.record_rejected("json_memory_full");
-  return HttpError(503, "overloaded", "request bodies being parsed already hold " + std::to_string(memory_.used() >> 20) + " MiB of the " +
-                                          std::to_string(memory_.capacity() >> 20) + " MiB they may; retry shortly",
+  return HttpError(503, "overloaded", "request bodies being parsed already hold " + used_of_capacity(memory_) + " they may; retry shortly",
                    {{"Retry-After", "1"}});
 }
 

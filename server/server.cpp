@@ -6,7 +6,6 @@
 #include "api/feature_line_json.h"
 #include "api/feature_seeds_json.h"
 #include "api/gltf_export.h"
-#include "api/json_budget.h"
 #include "api/options_table.h"
 #include "api/requests.h"
 #include "api/segmentation_json.h"
@@ -15,7 +14,6 @@
 #include "engine/mesh_io.h"
 #include "engine/segmentation.h"
 #include "engine/scratch_memory.h"
-#include "engine/valid_range.h"
 
 #include <httplib.h>
 #include <nlohmann/json.hpp>
@@ -54,6 +52,7 @@ using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
 constexpr std::size_t kMaxJsonBytes = RequestLimits::max_json_bytes;
+constexpr const char* kMeshesPath = "/v1/meshes";
 // The front (deploy/nginx.conf.template) names what it asks of a replica in this header:
 // "hand-off" on an upload (store it and hand it back), "uploaded" when it sends that upload on
 // to the replica its id belongs to. The front sets or clears it on every request it forwards.
@@ -88,7 +87,7 @@ void write_json(httplib::Response& res, int status, const json& body) {
   res.set_content(body.dump(), "application/json");
 }
 
-bool is_upload(std::string_view method, std::string_view path) { return method == "POST" && path == "/v1/meshes"; }
+bool is_upload(std::string_view method, std::string_view path) { return method == "POST" && path == kMeshesPath; }
 
 // The transport's limits from the server's options: bodies are refused before they are read when
 // larger than the upload limit (uploads) or the JSON limit (every other route).
@@ -370,20 +369,75 @@ struct FeaturelineServer::Impl {
     };
   }
 
-  // ---- routes (the one table) -------------------------------------------------------------
-  void register_routes() {
-    const std::string mesh = "/v1/meshes/([^/]+)";
-    http.Post("/v1/meshes", [this](const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
-      request_route = "/v1/meshes";
+  // What /metrics reports at scrape time beside the request counts.
+  std::map<std::string, std::pair<std::string, double>> gauges() {
+    const auto s = cache.stats();
+    return {
+        {"featureline_cache_entries", {"Prepared meshes in the session cache.", double(s.entries)}},
+        {"featureline_cache_bytes", {"Bytes held by the session cache.", double(s.bytes)}},
+        {"featureline_cache_budget_bytes", {"Byte budget of the session cache.", double(options.cache_mb << 20)}},
+        {"featureline_engine_scratch_bytes",
+         {"Per-thread engine scratch kept between requests; counts in the cache's budget.", double(engine_scratch_bytes())}},
+        {"featureline_cache_evictions_total", {"Sessions evicted to stay within the budget.", double(s.evictions)}},
+        {"featureline_cache_expirations_total", {"Sessions expired after their idle time.", double(s.expirations)}},
+        {"featureline_cache_inserts_total", {"Meshes uploaded and prepared.", double(s.inserts)}},
+        {"featureline_store_rebuilds_total", {"Sessions prepared again from the upload store after a cache miss.",
+                                              double(sessions.rebuilds())}},
+        {"featureline_uploads_handed_off_total", {"Uploads stored and handed back to the front for the replica their id belongs to.",
+                                                  double(uploads_handed_off.load())}},
+        {"featureline_uploads_taken_over_total", {"Uploads handed off by another replica and prepared here.",
+                                                  double(sessions.handoffs())}},
+        {"featureline_store_bytes", {"Upload bytes held by a directory store.",
+                                     double(sessions.store() ? sessions.store()->bytes() : 0)}},
+        {"featureline_store_breaker_open", {"1 while the upload store's circuit breaker is open (operations fail at once).",
+                                            breaker && breaker->open() ? 1.0 : 0.0}},
+        {"featureline_store_breaker_openings_total", {"Times the upload store's circuit breaker opened after consecutive timeouts.",
+                                                      double(breaker ? breaker->openings() : 0)}},
+        {"featureline_store_data_losses_total", {"Times the upload store was found to have lost its data (Redis restarted empty).",
+                                                 double(sessions.store_losses().count)}},
+        {"featureline_pool_queue_depth", {"Engine jobs waiting for a thread.", double(pool.queue_depth())}},
+        {"featureline_pool_running", {"Engine jobs running.", double(pool.running())}},
+        {"featureline_pool_threads", {"Engine threads.", double(pool.threads())}},
+        {"featureline_pool_queue_capacity", {"Engine jobs that may wait before requests are refused.", double(pool.capacity())}},
+        {"featureline_uptime_seconds", {"Seconds since the server started.",
+                                        std::chrono::duration<double>(Clock::now() - started).count()}},
+    };
+  }
+
+  // Wraps a handler of a route with a body, as guarded does. A body left unread closes the
+  // connection (the transport does), so the answer says so.
+  template <typename Handler>
+  auto guarded_with_body(const char* route, Handler handler) {
+    return [route, handler](const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
+      request_route = route;
       bool body_read = false;
       try {
-        upload(req, res, reader, body_read);
+        handler(req, res, reader, body_read);
       } catch (...) {
         write_error(res, error_reply(std::current_exception()));
-        // The transport closes the connection when a body is left unread; the answer says so.
         if (!body_read) res.set_header("Connection", "close");
       }
+    };
+  }
+
+  // A route with a JSON body, read by bytes received within RequestLimits::max_json_bytes and
+  // the budget shared by every JSON body before the handler runs.
+  template <typename Handler>
+  auto with_json_body(const char* route, Handler handler) {
+    return guarded_with_body(route, [this, handler](const auto& req, auto& res, const auto& reader, bool& body_read) {
+      JsonBody body(json_bodies.memory());
+      json_bodies.read(reader, body);
+      body_read = true;
+      handler(req, body, res);
     });
+  }
+
+  // ---- routes (the one table) -------------------------------------------------------------
+  void register_routes() {
+    const std::string mesh = std::string(kMeshesPath) + "/([^/]+)";
+    http.Post(kMeshesPath, guarded_with_body(kMeshesPath, [this](const auto& req, auto& res, const auto& reader, bool& body_read) {
+      upload(req, res, reader, body_read);
+    }));
     http.Get(mesh, guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
       if (req.get_header_value(kFrontHeader) == "uploaded") return prepare_handed_off(req.matches[1], res);
       write_json(res, 200, describe(*session_or_404(req.matches[1])));
@@ -401,7 +455,7 @@ struct FeaturelineServer::Impl {
       });
       res.set_header("Cache-Control", "private, max-age=3600");
       // The page's largest download: gzip when accepted (httplib compresses no model/* type).
-      set_content_gzip_if_accepted(req, res, std::move(glb), "model/gltf-binary");
+      set_content_gzip_if_accepted(req, res, std::move(glb), export_format_info(ExportFormat::glb).mime_type);
     }));
     http.Get(mesh + "/features", guarded("/v1/meshes/{id}/features", [this](const auto& req, auto& res) {
       // Crease chains and ridge/valley vertices to pick keys from; options as query parameters.
@@ -414,10 +468,12 @@ struct FeaturelineServer::Impl {
     http.Get(mesh + "/curvature", guarded("/v1/meshes/{id}/curvature", [this](const auto& req, auto& res) {
       curvature(req, res);
     }));
-    post_json(mesh + "/feature-lines", "/v1/meshes/{id}/feature-lines",
-              [this](const auto& req, JsonBody& body, auto& res) { feature_lines(req, body, res); });
-    post_json(mesh + "/segmentation", "/v1/meshes/{id}/segmentation",
-              [this](const auto& req, JsonBody& body, auto& res) { segmentation(req, body, res); });
+    http.Post(mesh + "/feature-lines", with_json_body("/v1/meshes/{id}/feature-lines", [this](const auto& req, JsonBody& body, auto& res) {
+      feature_lines(req, body, res);
+    }));
+    http.Post(mesh + "/segmentation", with_json_body("/v1/meshes/{id}/segmentation", [this](const auto& req, JsonBody& body, auto& res) {
+      segmentation(req, body, res);
+    }));
     http.Get("/v1/options", guarded("/v1/options", [](const auto&, auto& res) {
       // Every option with its type, default, limits and description (the page's inputs use it).
       static const std::string description = describe_api_options().dump();
@@ -432,38 +488,7 @@ struct FeaturelineServer::Impl {
     }));
     http.Get("/readyz", guarded("/readyz", [this](const auto&, auto& res) { write_json(res, 200, readiness()); }));
     http.Get("/metrics", guarded("/metrics", [this](const auto&, auto& res) {
-      const auto s = cache.stats();
-      const std::map<std::string, std::pair<std::string, double>> gauges = {
-          {"featureline_cache_entries", {"Prepared meshes in the session cache.", double(s.entries)}},
-          {"featureline_cache_bytes", {"Bytes held by the session cache.", double(s.bytes)}},
-          {"featureline_cache_budget_bytes", {"Byte budget of the session cache.", double(options.cache_mb << 20)}},
-          {"featureline_engine_scratch_bytes",
-           {"Per-thread engine scratch kept between requests; counts in the cache's budget.", double(engine_scratch_bytes())}},
-          {"featureline_cache_evictions_total", {"Sessions evicted to stay within the budget.", double(s.evictions)}},
-          {"featureline_cache_expirations_total", {"Sessions expired after their idle time.", double(s.expirations)}},
-          {"featureline_cache_inserts_total", {"Meshes uploaded and prepared.", double(s.inserts)}},
-          {"featureline_store_rebuilds_total", {"Sessions prepared again from the upload store after a cache miss.",
-                                                double(sessions.rebuilds())}},
-          {"featureline_uploads_handed_off_total", {"Uploads stored and handed back to the front for the replica their id belongs to.",
-                                                    double(uploads_handed_off.load())}},
-          {"featureline_uploads_taken_over_total", {"Uploads handed off by another replica and prepared here.",
-                                                    double(sessions.handoffs())}},
-          {"featureline_store_bytes", {"Upload bytes held by a directory store.",
-                                       double(sessions.store() ? sessions.store()->bytes() : 0)}},
-          {"featureline_store_breaker_open", {"1 while the upload store's circuit breaker is open (operations fail at once).",
-                                              breaker && breaker->open() ? 1.0 : 0.0}},
-          {"featureline_store_breaker_openings_total", {"Times the upload store's circuit breaker opened after consecutive timeouts.",
-                                                        double(breaker ? breaker->openings() : 0)}},
-          {"featureline_store_data_losses_total", {"Times the upload store was found to have lost its data (Redis restarted empty).",
-                                                   double(sessions.store_losses().count)}},
-          {"featureline_pool_queue_depth", {"Engine jobs waiting for a thread.", double(pool.queue_depth())}},
-          {"featureline_pool_running", {"Engine jobs running.", double(pool.running())}},
-          {"featureline_pool_threads", {"Engine threads.", double(pool.threads())}},
-          {"featureline_pool_queue_capacity", {"Engine jobs that may wait before requests are refused.", double(pool.capacity())}},
-          {"featureline_uptime_seconds", {"Seconds since the server started.",
-                                          std::chrono::duration<double>(Clock::now() - started).count()}},
-      };
-      res.set_content(metrics.render(gauges), "text/plain; version=0.0.4");
+      res.set_content(metrics.render(gauges()), "text/plain; version=0.0.4");
     }));
     http.Options(".*", guarded("OPTIONS", [this](const auto& req, auto& res) {
       // CORS preflight: allowed origins get the methods and headers they may use.
@@ -474,7 +499,11 @@ struct FeaturelineServer::Impl {
         res.set_header("Access-Control-Max-Age", "600");
       }
     }));
-    // The page: a folder given with --web-root, else the copy compiled into the binary.
+    register_page();
+  }
+
+  // The page: a folder given with --web-root, else the copy compiled into the binary.
+  void register_page() {
     if (!options.web_root.empty()) {
       if (!http.set_mount_point("/", options.web_root, {{"Cache-Control", kWebCacheControl}}))
         throw std::runtime_error("cannot serve the web page folder " + options.web_root);
@@ -511,7 +540,7 @@ struct FeaturelineServer::Impl {
   // Expect: 100-continue: an upload that will be refused gets its refusal instead of 100 Continue
   // (the client then never sends the body, and the transport closes the connection).
   int expect_continue(const httplib::Request& req, httplib::Response& res) {
-    if (req.method != "POST" || req.path != "/v1/meshes") return 100;
+    if (!is_upload(req.method, req.path)) return 100;
     try {
       uploads.check_head(req);
       return 100;
@@ -537,7 +566,7 @@ struct FeaturelineServer::Impl {
       throw HttpError(413, "payload_too_large",
                       "the prepared mesh needs " + std::to_string(needed >> 20) + " MiB, more than the cache's whole budget of " +
                           std::to_string(options.cache_mb) + " MiB");
-    res.set_header("Location", "/v1/meshes/" + (*stored)->id);
+    res.set_header("Location", std::string(kMeshesPath) + "/" + (*stored)->id);
     write_json(res, 201, describe(**stored));
   }
 
@@ -572,7 +601,7 @@ struct FeaturelineServer::Impl {
     }
     if (!found.session)
       throw StoreUnavailableError("the upload store lost the upload " + quote_client_text(id) + " before it was prepared; upload it again");
-    res.set_header("Location", "/v1/meshes/" + found.session->id);
+    res.set_header("Location", std::string(kMeshesPath) + "/" + found.session->id);
     write_json(res, 201, describe(*found.session));
   }
 
@@ -590,38 +619,19 @@ struct FeaturelineServer::Impl {
     // The field the engine reads (engine/curvature.h), not the one-ring mean curvature H: on a
     // noisy scan H is mostly noise, and the page snaps keys to this field's extremes.
     const auto h = dominant_curvatures(session->mesh->curvature);
-    if (accepts(req, "application/octet-stream")) {
-      static_assert(sizeof(float) == 4, "float32 output");
-      std::string bytes(h.size() * 4, '\0');
+    if (accepts(req, kOctetStream)) {
+      static_assert(sizeof(float) == sizeof(std::uint32_t), "float32 output");
+      std::string bytes(h.size() * sizeof(float), '\0');
       for (std::size_t i = 0; i < h.size(); ++i) {
         const float f = float(h[i]);
         std::uint32_t bits;
-        std::memcpy(&bits, &f, 4);
-        for (int b = 0; b < 4; ++b) bytes[4 * i + b] = char((bits >> (8 * b)) & 0xFF);  // little-endian
+        std::memcpy(&bits, &f, sizeof bits);
+        for (std::size_t b = 0; b < sizeof bits; ++b) bytes[sizeof bits * i + b] = char((bits >> (8 * b)) & 0xFF);  // little-endian
       }
-      res.set_content(std::move(bytes), "application/octet-stream");
+      res.set_content(std::move(bytes), kOctetStream);
       return;
     }
     write_json(res, 200, {{"vertices", h.size()}, {"curvature", h}});
-  }
-
-  // A POST route with a JSON body: the body is read here, by bytes received, within 4 MiB and
-  // the shared budget; a body left unread closes the connection (the transport does), so say so.
-  template <typename Handler>
-  void post_json(const std::string& pattern, const char* route, Handler handler) {
-    http.Post(pattern, [this, route, handler](const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
-      request_route = route;
-      bool body_read = false;
-      try {
-        JsonBody body(json_bodies.memory());
-        json_bodies.read(reader, body);
-        body_read = true;
-        handler(req, body, res);
-      } catch (...) {
-        write_error(res, error_reply(std::current_exception()));
-        if (!body_read) res.set_header("Connection", "close");
-      }
-    });
   }
 
   void segmentation(const httplib::Request& req, JsonBody& request_body, httplib::Response& res) {
@@ -636,9 +646,10 @@ struct FeaturelineServer::Impl {
     const SegmentationResult segments = jobs.run([session, results, segmentation_options](const Cancellation* cancel) {
       return segment_mesh(*session->mesh, results, segmentation_options, cancel);
     });
+    const char* type = export_format_info(format).mime_type;
     if (format == ExportFormat::json) write_json(res, 200, segmentation_to_json(segments, segmentation_options.mode));
-    else if (format == ExportFormat::glb) res.set_content(segmentation_to_glb(*session->mesh, segments), "model/gltf-binary");
-    else res.set_content(export_segmentation(*session->mesh, segments, format), export_format_info(format).mime_type);
+    else if (format == ExportFormat::glb) res.set_content(segmentation_to_glb(*session->mesh, segments), type);
+    else res.set_content(export_segmentation(*session->mesh, segments, format), type);
   }
 
   void feature_lines(const httplib::Request& req, JsonBody& request_body, httplib::Response& res) {
@@ -652,12 +663,13 @@ struct FeaturelineServer::Impl {
     char server_timing[96];
     std::snprintf(server_timing, sizeof server_timing, "queue;dur=%.3f, engine;dur=%.3f", timing.queue_ms, timing.engine_ms);
     res.set_header("Server-Timing", server_timing);
+    const char* type = export_format_info(answer).mime_type;
     if (answer == ExportFormat::glb) {
-      res.set_content(feature_line_to_glb(*session->mesh, results, false), "model/gltf-binary");
+      res.set_content(feature_line_to_glb(*session->mesh, results, false), type);
     } else if (answer == ExportFormat::gltf) {
-      res.set_content(feature_line_to_gltf_json(*session->mesh, results, false), "model/gltf+json");
+      res.set_content(feature_line_to_gltf_json(*session->mesh, results, false), type);
     } else if (answer != ExportFormat::json) {
-      res.set_content(export_lines(results, answer), export_format_info(answer).mime_type);
+      res.set_content(export_lines(results, answer), type);
     } else if (batch) {
       json out = json::array();
       for (const auto& r : results) out.push_back(feature_line_to_json(r));

@@ -123,8 +123,7 @@ std::string UploadBodies::read_gltf_files(const httplib::ContentReader& reader, 
 // has received (not what it declares), so a few slow large uploads cannot hold the memory.
 HttpError UploadBodies::buffer_full() {
   metrics_.record_rejected("upload_buffer_full");
-  return HttpError(503, "overloaded", "uploads being received already hold " + std::to_string(buffer_.used() >> 20) + " MiB of the " +
-                                          std::to_string(buffer_.capacity() >> 20) + " MiB the server buffers; retry shortly",
+  return HttpError(503, "overloaded", "uploads being received already hold " + used_of_capacity(buffer_) + " the server buffers; retry shortly",
                    {{"Retry-After", "5"}});
 }
 
