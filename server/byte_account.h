@@ -3,8 +3,10 @@
 // however many arrive at once.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <string>
 
 namespace featureline::server {
 
@@ -58,5 +60,27 @@ class ByteHold {
   ByteAccount& account_;
   std::size_t bytes_ = 0;
 };
+
+/// "N MiB of the M MiB": how much of an account is in use, for the refusal when it is spent.
+inline std::string used_of_capacity(const ByteAccount& account) {
+  return std::to_string(account.used() >> 20) + " MiB of the " + std::to_string(account.capacity() >> 20) + " MiB";
+}
+
+/// What append_held did with a chunk of a body.
+enum class Appended { ok, past_limit, account_full };
+
+/// Appends a received chunk to `body`, which never grows past `limit` bytes. The string grows by
+/// doubling and `held` holds its capacity, what it has really allocated, so a body is counted
+/// by the bytes it received rather than the length it declared.
+inline Appended append_held(std::string& body, ByteHold& held, std::size_t limit, const char* data, std::size_t size) {
+  if (size > limit || body.size() > limit - size) return Appended::past_limit;
+  if (body.size() + size > body.capacity()) {
+    const std::size_t capacity = std::min(limit, std::max(body.size() + size, 2 * body.capacity()));
+    if (!held.hold(capacity)) return Appended::account_full;
+    body.reserve(capacity);
+  }
+  body.append(data, size);
+  return Appended::ok;
+}
 
 }  // namespace featureline::server

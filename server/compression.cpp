@@ -1,23 +1,19 @@
 #include "server/compression.h"
 
+// Eigen (through the export formats) must come before httplib.h: its <resolv.h> defines `_res`.
+#include "server/content_negotiation.h"
+
 #include <httplib.h>
 #include <zlib.h>
 
 #include <algorithm>
 #include <cctype>
-#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 
 namespace featureline {
 
 namespace {
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
-  return s;
-}
 
 bool iequals(std::string_view a, std::string_view b) {
   if (a.size() != b.size()) return false;
@@ -26,36 +22,12 @@ bool iequals(std::string_view a, std::string_view b) {
   return true;
 }
 
-// The q-value of one Accept-Encoding element's parameters ("q=0.5"); 1 when absent, 0 when
-// malformed (a client that writes nonsense gets no compression rather than a guess).
-double quality(std::string_view params) {
-  while (!params.empty()) {
-    const auto semicolon = params.find(';');
-    const std::string_view param = trim(params.substr(0, semicolon));
-    params = semicolon == std::string_view::npos ? std::string_view{} : params.substr(semicolon + 1);
-    if (param.size() >= 2 && (param[0] == 'q' || param[0] == 'Q') && param[1] == '=') {
-      const std::string value(trim(param.substr(2)));
-      char* end = nullptr;
-      const double q = std::strtod(value.c_str(), &end);
-      if (value.empty() || end != value.c_str() + value.size() || !(q >= 0 && q <= 1)) return 0;
-      return q;
-    }
-  }
-  return 1;
-}
-
 }  // namespace
 
 bool accepts_gzip(std::string_view accept_encoding) {
   double gzip_q = -1;  // not named
   double any_q = -1;   // "*"
-  while (!accept_encoding.empty()) {
-    const auto comma = accept_encoding.find(',');
-    const std::string_view element = accept_encoding.substr(0, comma);
-    accept_encoding = comma == std::string_view::npos ? std::string_view{} : accept_encoding.substr(comma + 1);
-    const auto semicolon = element.find(';');
-    const std::string_view coding = trim(element.substr(0, semicolon));
-    const double q = quality(semicolon == std::string_view::npos ? std::string_view{} : element.substr(semicolon + 1));
+  for (const auto& [coding, q] : server::weighted_elements(accept_encoding)) {
     if (iequals(coding, "gzip") || iequals(coding, "x-gzip")) gzip_q = std::max(gzip_q, q);
     else if (coding == "*") any_q = std::max(any_q, q);
   }

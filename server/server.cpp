@@ -6,7 +6,6 @@
 #include "api/feature_line_json.h"
 #include "api/feature_seeds_json.h"
 #include "api/gltf_export.h"
-#include "api/json_budget.h"
 #include "api/options_table.h"
 #include "api/requests.h"
 #include "api/segmentation_json.h"
@@ -15,7 +14,6 @@
 #include "engine/mesh_io.h"
 #include "engine/segmentation.h"
 #include "engine/scratch_memory.h"
-#include "engine/valid_range.h"
 
 #include <httplib.h>
 #include <nlohmann/json.hpp>
@@ -28,18 +26,21 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
-#include <future>
 #include <iostream>
 #include <malloc.h>
 #include <mutex>
 
 #include "server/byte_account.h"
 #include "server/compression.h"
+#include "server/content_negotiation.h"
+#include "server/engine_jobs.h"
 #include "server/http_errors.h"
+#include "server/json_body.h"
 #include "server/metrics.h"
 #include "server/session_cache.h"
 #include "server/store_breaker.h"
 #include "server/transport.h"
+#include "server/upload_body.h"
 #include "server/upload_store.h"
 #include "server/web_assets.h"
 #include "server/work_pool.h"
@@ -51,10 +52,7 @@ using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
 constexpr std::size_t kMaxJsonBytes = RequestLimits::max_json_bytes;
-// Upload buffers start at this and double as bytes arrive (held against the upload budget).
-constexpr std::size_t kUploadChunkBytes = std::size_t(1) << 20;
-// A .gltf and its .bin files rarely number more than a few; every part costs a string.
-constexpr std::size_t kMaxUploadFiles = 64;
+constexpr const char* kMeshesPath = "/v1/meshes";
 // The front (deploy/nginx.conf.template) names what it asks of a replica in this header:
 // "hand-off" on an upload (store it and hand it back), "uploaded" when it sends that upload on
 // to the replica its id belongs to. The front sets or clears it on every request it forwards.
@@ -78,33 +76,6 @@ const char* method_label(const std::string& method) {
   return "other";
 }
 
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
-
-// The media type without parameters, lower case ("Model/OBJ; charset=x" -> "model/obj").
-std::string media_type(const std::string& header) {
-  std::string type = lower(header.substr(0, header.find(';')));
-  while (!type.empty() && std::isspace((unsigned char)type.back())) type.pop_back();
-  while (!type.empty() && std::isspace((unsigned char)type.front())) type.erase(type.begin());
-  return type;
-}
-
-bool accepts(const httplib::Request& req, const std::string& type) {
-  return lower(req.get_header_value("Accept")).find(type) != std::string::npos;
-}
-
-// mesh.glb?compact=1: the quantised download the page reads (KHR_mesh_quantization); the float
-// GLB stays the default for other clients. A query, not Accept: both are model/gltf-binary.
-bool compact_glb_requested(const httplib::Request& req) {
-  if (!req.has_param("compact")) return false;
-  const std::string value = lower(req.get_param_value("compact"));
-  if (value == "1" || value == "true") return true;
-  if (value == "0" || value == "false") return false;
-  throw HttpError(400, "invalid_request", "compact must be 1, true, 0 or false");
-}
-
 void write_error(httplib::Response& res, const ErrorReply& error) {
   res.status = error.status;
   for (const auto& [k, v] : error.headers) res.set_header(k, v);
@@ -116,7 +87,7 @@ void write_json(httplib::Response& res, int status, const json& body) {
   res.set_content(body.dump(), "application/json");
 }
 
-bool is_upload(std::string_view method, std::string_view path) { return method == "POST" && path == "/v1/meshes"; }
+bool is_upload(std::string_view method, std::string_view path) { return method == "POST" && path == kMeshesPath; }
 
 // The transport's limits from the server's options: bodies are refused before they are read when
 // larger than the upload limit (uploads) or the JSON limit (every other route).
@@ -140,6 +111,12 @@ ReadMeshOptions upload_read_limits(const ServerOptions& o) {
   if (o.max_triangles != 0) limits.max_triangles = o.max_triangles;
   if (o.max_vertices != 0) limits.max_vertices = o.max_vertices;
   return limits;
+}
+
+// All upload bodies being received at once (4 uploads of 200 MB had reached 880 MB of resident
+// memory before they were bounded).
+std::size_t upload_buffer_bytes(const ServerOptions& o) {
+  return o.upload_buffer_mb != 0 ? o.upload_buffer_mb << 20 : 2 * (o.max_upload_mb << 20);
 }
 
 // The store's idle clock is restarted at most this often per session: a quarter of the TTL, at
@@ -166,23 +143,6 @@ std::string utc_time(std::int64_t unix_s) {
   return stamp;
 }
 
-// Reads and prepares an upload: engine work, run on the pool (uploads and rebuilds alike), whose
-// idle threads the preparation's parallel parts use (`executor`: the pool).
-MeshSession prepare_session(std::string_view bytes, MeshFormat format, const ReadMeshOptions& limits,
-                            const Cancellation* cancel, Executor& executor) {
-  const auto t0 = Clock::now();
-  RawMesh raw = read_mesh(bytes, format, limits);
-  MeshSession s;
-  s.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  s.format = format;
-  PrepareOptions options;
-  options.max_memory_bytes = limits.memory_budget_bytes;  // nothing is prepared that the cache could never keep
-  options.executor = &executor;
-  s.mesh = prepare_mesh(std::move(raw), options, cancel);
-  s.bytes = s.mesh->memory_bytes();
-  return s;
-}
-
 }  // namespace
 
 struct FeaturelineServer::Impl {
@@ -194,6 +154,10 @@ struct FeaturelineServer::Impl {
   StoreBreaker* breaker = nullptr;  // in front of the upload store (owned by sessions); null without one
   DurableSessions sessions;         // the cache in front of the upload store (if any)
   Metrics metrics;
+  EngineJobs jobs{pool, metrics, options.deadline_s};
+  // Bodies being received or parsed sit outside the cache budget, each kind within its own.
+  UploadBodies uploads{options.max_upload_mb << 20, upload_buffer_bytes(options), metrics};
+  JsonBodies json_bodies{JsonBodies::budget_for(options.cache_mb << 20), metrics};
   std::atomic<std::uint64_t> uploads_handed_off{0};
   const Clock::time_point started = Clock::now();
   std::mutex log_mutex;
@@ -240,8 +204,8 @@ struct FeaturelineServer::Impl {
   std::size_t bytes_at_last_trim = 0;
   void return_freed_memory() {
     const std::size_t bytes = cache.stats().bytes;
-    const std::size_t bodies_peak = json_memory.take_peak() + upload_buffer.take_peak();
-    const std::size_t bodies_now = json_memory.used() + upload_buffer.used();
+    const std::size_t bodies_peak = json_bodies.memory().take_peak() + uploads.buffer().take_peak();
+    const std::size_t bodies_now = json_bodies.memory().used() + uploads.buffer().used();
     constexpr std::size_t kWorthTrimming = std::size_t(16) << 20;
     if (bytes < bytes_at_last_trim || bodies_peak > bodies_now + kWorthTrimming) malloc_trim(0);
     bytes_at_last_trim = bytes;
@@ -330,42 +294,6 @@ struct FeaturelineServer::Impl {
   }
 
   // ---- helpers shared by handlers -------------------------------------------------------
-  // The request's deadline as a point in time, shared by its engine work.
-  Clock::time_point request_deadline() const {
-    return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.deadline_s));
-  }
-
-  // Runs job(cancel) on the engine pool and waits for it until the request's deadline. The job's
-  // Cancellation carries that deadline, so work that is refused or times out stops at its next
-  // check instead of holding an engine thread (preparation, segmentation, mesh export).
-  template <typename Job>
-  auto run_on_pool(Job job) {
-    const auto deadline = request_deadline();
-    const auto cancel = std::make_shared<Cancellation>(deadline);
-    auto future = submit_or_503([job = std::move(job), cancel]() mutable { return job(cancel.get()); });
-    if (future.wait_until(deadline) != std::future_status::ready) {
-      cancel->cancel();
-      throw_past_deadline();
-    }
-    return future.get();  // rethrows what the job threw
-  }
-
-  // The engine pool's two refusals, worded and counted in one place.
-  template <typename Task>
-  auto submit_or_503(Task task) {
-    auto future = pool.try_submit(std::move(task));
-    if (!future) {
-      metrics.record_rejected("queue_full");
-      throw HttpError(503, "overloaded", "the server is busy; retry shortly", {{"Retry-After", "1"}});
-    }
-    return std::move(*future);
-  }
-  [[noreturn]] void throw_past_deadline() {
-    metrics.record_rejected("deadline");
-    throw HttpError(503, "deadline_exceeded", "the request took longer than the server's deadline of " + format_number(options.deadline_s) + " s",
-                    {{"Retry-After", "5"}});
-  }
-
   // A session from the cache, or rebuilt from the upload store (a 503 when the store is down).
   std::shared_ptr<const MeshSession> session_or_404(const std::string& id) {
     auto found = sessions.find(id);
@@ -411,9 +339,7 @@ struct FeaturelineServer::Impl {
 
   // Prepares a stored upload again after a cache miss (eviction, restart, another replica's id).
   MeshSession rebuild(std::shared_ptr<const StoredUpload> upload) {
-    return run_on_pool([this, upload, limits = read_limits](const Cancellation* cancel) {
-      return prepare_session(upload->bytes, upload->format, limits, cancel, pool);
-    });
+    return jobs.prepare(std::move(upload), read_limits);
   }
 
   void log_line(const std::string& text) {
@@ -443,20 +369,75 @@ struct FeaturelineServer::Impl {
     };
   }
 
-  // ---- routes (the one table) -------------------------------------------------------------
-  void register_routes() {
-    const std::string mesh = "/v1/meshes/([^/]+)";
-    http.Post("/v1/meshes", [this](const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
-      request_route = "/v1/meshes";
+  // What /metrics reports at scrape time beside the request counts.
+  std::map<std::string, std::pair<std::string, double>> gauges() {
+    const auto s = cache.stats();
+    return {
+        {"featureline_cache_entries", {"Prepared meshes in the session cache.", double(s.entries)}},
+        {"featureline_cache_bytes", {"Bytes held by the session cache.", double(s.bytes)}},
+        {"featureline_cache_budget_bytes", {"Byte budget of the session cache.", double(options.cache_mb << 20)}},
+        {"featureline_engine_scratch_bytes",
+         {"Per-thread engine scratch kept between requests; counts in the cache's budget.", double(engine_scratch_bytes())}},
+        {"featureline_cache_evictions_total", {"Sessions evicted to stay within the budget.", double(s.evictions)}},
+        {"featureline_cache_expirations_total", {"Sessions expired after their idle time.", double(s.expirations)}},
+        {"featureline_cache_inserts_total", {"Meshes uploaded and prepared.", double(s.inserts)}},
+        {"featureline_store_rebuilds_total", {"Sessions prepared again from the upload store after a cache miss.",
+                                              double(sessions.rebuilds())}},
+        {"featureline_uploads_handed_off_total", {"Uploads stored and handed back to the front for the replica their id belongs to.",
+                                                  double(uploads_handed_off.load())}},
+        {"featureline_uploads_taken_over_total", {"Uploads handed off by another replica and prepared here.",
+                                                  double(sessions.handoffs())}},
+        {"featureline_store_bytes", {"Upload bytes held by a directory store.",
+                                     double(sessions.store() ? sessions.store()->bytes() : 0)}},
+        {"featureline_store_breaker_open", {"1 while the upload store's circuit breaker is open (operations fail at once).",
+                                            breaker && breaker->open() ? 1.0 : 0.0}},
+        {"featureline_store_breaker_openings_total", {"Times the upload store's circuit breaker opened after consecutive timeouts.",
+                                                      double(breaker ? breaker->openings() : 0)}},
+        {"featureline_store_data_losses_total", {"Times the upload store was found to have lost its data (Redis restarted empty).",
+                                                 double(sessions.store_losses().count)}},
+        {"featureline_pool_queue_depth", {"Engine jobs waiting for a thread.", double(pool.queue_depth())}},
+        {"featureline_pool_running", {"Engine jobs running.", double(pool.running())}},
+        {"featureline_pool_threads", {"Engine threads.", double(pool.threads())}},
+        {"featureline_pool_queue_capacity", {"Engine jobs that may wait before requests are refused.", double(pool.capacity())}},
+        {"featureline_uptime_seconds", {"Seconds since the server started.",
+                                        std::chrono::duration<double>(Clock::now() - started).count()}},
+    };
+  }
+
+  // Wraps a handler of a route with a body, as guarded does. A body left unread closes the
+  // connection (the transport does), so the answer says so.
+  template <typename Handler>
+  auto guarded_with_body(const char* route, Handler handler) {
+    return [route, handler](const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
+      request_route = route;
       bool body_read = false;
       try {
-        upload(req, res, reader, body_read);
+        handler(req, res, reader, body_read);
       } catch (...) {
         write_error(res, error_reply(std::current_exception()));
-        // The transport closes the connection when a body is left unread; the answer says so.
         if (!body_read) res.set_header("Connection", "close");
       }
+    };
+  }
+
+  // A route with a JSON body, read by bytes received within RequestLimits::max_json_bytes and
+  // the budget shared by every JSON body before the handler runs.
+  template <typename Handler>
+  auto with_json_body(const char* route, Handler handler) {
+    return guarded_with_body(route, [this, handler](const auto& req, auto& res, const auto& reader, bool& body_read) {
+      JsonBody body(json_bodies.memory());
+      json_bodies.read(reader, body);
+      body_read = true;
+      handler(req, body, res);
     });
+  }
+
+  // ---- routes (the one table) -------------------------------------------------------------
+  void register_routes() {
+    const std::string mesh = std::string(kMeshesPath) + "/([^/]+)";
+    http.Post(kMeshesPath, guarded_with_body(kMeshesPath, [this](const auto& req, auto& res, const auto& reader, bool& body_read) {
+      upload(req, res, reader, body_read);
+    }));
     http.Get(mesh, guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
       if (req.get_header_value(kFrontHeader) == "uploaded") return prepare_handed_off(req.matches[1], res);
       write_json(res, 200, describe(*session_or_404(req.matches[1])));
@@ -469,28 +450,30 @@ struct FeaturelineServer::Impl {
     http.Get(mesh + "/mesh\\.glb", guarded("/v1/meshes/{id}/mesh.glb", [this](const auto& req, auto& res) {
       auto session = session_or_404(req.matches[1]);
       const bool compact = compact_glb_requested(req);
-      std::string glb = run_on_pool([session, compact](const Cancellation*) {
+      std::string glb = jobs.run([session, compact](const Cancellation*) {
         return compact ? prepared_mesh_to_compact_glb(*session->mesh) : feature_line_to_glb(*session->mesh, {}, true);
       });
       res.set_header("Cache-Control", "private, max-age=3600");
       // The page's largest download: gzip when accepted (httplib compresses no model/* type).
-      set_content_gzip_if_accepted(req, res, std::move(glb), "model/gltf-binary");
+      set_content_gzip_if_accepted(req, res, std::move(glb), export_format_info(ExportFormat::glb).mime_type);
     }));
     http.Get(mesh + "/features", guarded("/v1/meshes/{id}/features", [this](const auto& req, auto& res) {
       // Crease chains and ridge/valley vertices to pick keys from; options as query parameters.
       auto session = session_or_404(req.matches[1]);
       const FeatureSeedOptions seed_options = parse_feature_seed_query({req.params.begin(), req.params.end()});
-      write_json(res, 200, run_on_pool([session, seed_options](const Cancellation* cancel) {
+      write_json(res, 200, jobs.run([session, seed_options](const Cancellation* cancel) {
         return feature_seeds_to_json(*session->mesh, find_feature_seeds(*session->mesh, seed_options, cancel));
       }));
     }));
     http.Get(mesh + "/curvature", guarded("/v1/meshes/{id}/curvature", [this](const auto& req, auto& res) {
       curvature(req, res);
     }));
-    post_json(mesh + "/feature-lines", "/v1/meshes/{id}/feature-lines",
-              [this](const auto& req, JsonBody& body, auto& res) { feature_lines(req, body, res); });
-    post_json(mesh + "/segmentation", "/v1/meshes/{id}/segmentation",
-              [this](const auto& req, JsonBody& body, auto& res) { segmentation(req, body, res); });
+    http.Post(mesh + "/feature-lines", with_json_body("/v1/meshes/{id}/feature-lines", [this](const auto& req, JsonBody& body, auto& res) {
+      feature_lines(req, body, res);
+    }));
+    http.Post(mesh + "/segmentation", with_json_body("/v1/meshes/{id}/segmentation", [this](const auto& req, JsonBody& body, auto& res) {
+      segmentation(req, body, res);
+    }));
     http.Get("/v1/options", guarded("/v1/options", [](const auto&, auto& res) {
       // Every option with its type, default, limits and description (the page's inputs use it).
       static const std::string description = describe_api_options().dump();
@@ -505,38 +488,7 @@ struct FeaturelineServer::Impl {
     }));
     http.Get("/readyz", guarded("/readyz", [this](const auto&, auto& res) { write_json(res, 200, readiness()); }));
     http.Get("/metrics", guarded("/metrics", [this](const auto&, auto& res) {
-      const auto s = cache.stats();
-      const std::map<std::string, std::pair<std::string, double>> gauges = {
-          {"featureline_cache_entries", {"Prepared meshes in the session cache.", double(s.entries)}},
-          {"featureline_cache_bytes", {"Bytes held by the session cache.", double(s.bytes)}},
-          {"featureline_cache_budget_bytes", {"Byte budget of the session cache.", double(options.cache_mb << 20)}},
-          {"featureline_engine_scratch_bytes",
-           {"Per-thread engine scratch kept between requests; counts in the cache's budget.", double(engine_scratch_bytes())}},
-          {"featureline_cache_evictions_total", {"Sessions evicted to stay within the budget.", double(s.evictions)}},
-          {"featureline_cache_expirations_total", {"Sessions expired after their idle time.", double(s.expirations)}},
-          {"featureline_cache_inserts_total", {"Meshes uploaded and prepared.", double(s.inserts)}},
-          {"featureline_store_rebuilds_total", {"Sessions prepared again from the upload store after a cache miss.",
-                                                double(sessions.rebuilds())}},
-          {"featureline_uploads_handed_off_total", {"Uploads stored and handed back to the front for the replica their id belongs to.",
-                                                    double(uploads_handed_off.load())}},
-          {"featureline_uploads_taken_over_total", {"Uploads handed off by another replica and prepared here.",
-                                                    double(sessions.handoffs())}},
-          {"featureline_store_bytes", {"Upload bytes held by a directory store.",
-                                       double(sessions.store() ? sessions.store()->bytes() : 0)}},
-          {"featureline_store_breaker_open", {"1 while the upload store's circuit breaker is open (operations fail at once).",
-                                              breaker && breaker->open() ? 1.0 : 0.0}},
-          {"featureline_store_breaker_openings_total", {"Times the upload store's circuit breaker opened after consecutive timeouts.",
-                                                        double(breaker ? breaker->openings() : 0)}},
-          {"featureline_store_data_losses_total", {"Times the upload store was found to have lost its data (Redis restarted empty).",
-                                                   double(sessions.store_losses().count)}},
-          {"featureline_pool_queue_depth", {"Engine jobs waiting for a thread.", double(pool.queue_depth())}},
-          {"featureline_pool_running", {"Engine jobs running.", double(pool.running())}},
-          {"featureline_pool_threads", {"Engine threads.", double(pool.threads())}},
-          {"featureline_pool_queue_capacity", {"Engine jobs that may wait before requests are refused.", double(pool.capacity())}},
-          {"featureline_uptime_seconds", {"Seconds since the server started.",
-                                          std::chrono::duration<double>(Clock::now() - started).count()}},
-      };
-      res.set_content(metrics.render(gauges), "text/plain; version=0.0.4");
+      res.set_content(metrics.render(gauges()), "text/plain; version=0.0.4");
     }));
     http.Options(".*", guarded("OPTIONS", [this](const auto& req, auto& res) {
       // CORS preflight: allowed origins get the methods and headers they may use.
@@ -547,7 +499,11 @@ struct FeaturelineServer::Impl {
         res.set_header("Access-Control-Max-Age", "600");
       }
     }));
-    // The page: a folder given with --web-root, else the copy compiled into the binary.
+    register_page();
+  }
+
+  // The page: a folder given with --web-root, else the copy compiled into the binary.
+  void register_page() {
     if (!options.web_root.empty()) {
       if (!http.set_mount_point("/", options.web_root, {{"Cache-Control", kWebCacheControl}}))
         throw std::runtime_error("cannot serve the web page folder " + options.web_root);
@@ -581,76 +537,12 @@ struct FeaturelineServer::Impl {
   }
 
   // ---- handlers ----------------------------------------------------------------------------
-  // What an upload's head says, checked before its body is read.
-  struct UploadHead {
-    std::size_t length = 0;
-    std::optional<MeshFormat> format;  ///< from ?format= or Content-Type; else sniffed from the body
-    bool files = false;                ///< multipart/form-data: a .gltf and the files it names
-  };
-
-  // Refuses an upload from its head alone (throws HttpError). Transfer-Encoding, Content-Encoding,
-  // a repeated or oversized Content-Length never get here: the transport refuses them.
-  UploadHead check_upload_head(const httplib::Request& req) {
-    auto refuse = [&](int status, const char* code, const std::string& message) {
-      metrics.record_rejected(code);
-      throw HttpError(status, code, message);
-    };
-    UploadHead head;
-    if (!req.has_header("Content-Length")) refuse(411, "length_required", "the upload needs a Content-Length header");
-    const std::string length_text = req.get_header_value("Content-Length");
-    if (length_text.empty() || length_text.size() > 15 || length_text.find_first_not_of("0123456789") != std::string::npos)
-      refuse(400, "invalid_request", "Content-Length is not a number");
-    head.length = std::stoull(length_text);
-    if (head.length == 0) refuse(400, "malformed_mesh", "the upload is empty");
-    if (head.length > (options.max_upload_mb << 20))
-      refuse(413, "payload_too_large", "the upload is " + std::to_string(head.length) + " bytes; this server accepts at most " +
-                                           std::to_string(options.max_upload_mb) + " MiB");
-    if (req.has_param("format")) {
-      head.format = parse_mesh_format(req.get_param_value("format"));
-      if (!head.format) refuse(415, "unsupported_format", "unknown format \"" + quote_client_text(req.get_param_value("format")) +
-                                                              "\"; use one of " + supported_formats());
-    } else if (req.has_header("Content-Type")) {
-      const std::string type = media_type(req.get_header_value("Content-Type"));
-      static const std::map<std::string, MeshFormat> by_type = {
-          {"model/obj", MeshFormat::obj},        {"model/stl", MeshFormat::stl},
-          {"model/x-off", MeshFormat::off},      {"application/x-ply", MeshFormat::ply},
-          {"model/gltf-binary", MeshFormat::glb}, {"model/gltf+json", MeshFormat::gltf},
-          {"application/x-draco", MeshFormat::drc}};
-      if (auto it = by_type.find(type); it != by_type.end()) head.format = it->second;
-      else if (type == "application/x-www-form-urlencoded")
-        refuse(415, "unsupported_format",
-               "the body was sent as a form (curl -d does that); send it as application/octet-stream or a model/* type, "
-               "e.g. curl --data-binary @mesh.obj -H 'Content-Type: application/octet-stream'");
-      else if (type == "multipart/form-data")
-        head.files = true;
-      else if (type != "application/octet-stream" && !type.empty())
-        refuse(415, "unsupported_format", "unsupported Content-Type \"" + quote_client_text(type) + "\"");
-    }
-    return head;
-  }
-
-  // Upload bodies being received sit outside the cache budget: their total is bounded here, by
-  // the bytes each has received (not what it declares), so a few slow large uploads cannot hold
-  // the memory or the budget (4 uploads of 200 MB had reached 880 MB of resident memory).
-  ByteAccount upload_buffer{options.upload_buffer_mb != 0 ? options.upload_buffer_mb << 20 : 2 * (options.max_upload_mb << 20)};
-  HttpError upload_buffer_full() {
-    metrics.record_rejected("upload_buffer_full");
-    return HttpError(503, "overloaded", "uploads being received already hold " + std::to_string(upload_buffer.used() >> 20) +
-                                            " MiB of the " + std::to_string(upload_buffer.capacity() >> 20) +
-                                            " MiB the server buffers; retry shortly",
-                     {{"Retry-After", "5"}});
-  }
-
-  // Parsed JSON bodies share one budget too: a body's DOM is bounded by its size
-  // (api/json_budget.h), and all of them at once by this account.
-  ByteAccount json_memory{std::max<std::size_t>(std::size_t(64) << 20, (options.cache_mb << 20) / 4)};
-
   // Expect: 100-continue: an upload that will be refused gets its refusal instead of 100 Continue
   // (the client then never sends the body, and the transport closes the connection).
   int expect_continue(const httplib::Request& req, httplib::Response& res) {
-    if (req.method != "POST" || req.path != "/v1/meshes") return 100;
+    if (!is_upload(req.method, req.path)) return 100;
     try {
-      check_upload_head(req);
+      uploads.check_head(req);
       return 100;
     } catch (...) {
       write_error(res, error_reply(std::current_exception()));
@@ -659,97 +551,22 @@ struct FeaturelineServer::Impl {
     }
   }
 
-  // A .gltf posted with the files it names, as multipart/form-data (a browser's FormData, curl
-  // -F): the parts are read within the upload's buffer hold, then packed into one GLB (engine
-  // pack_gltf_files), which is what is stored and prepared, so the session can be rebuilt from
-  // one blob like any upload.
-  std::string read_gltf_files(const httplib::ContentReader& reader, std::size_t length, ByteHold& buffered, bool& body_read) {
-    std::vector<std::pair<std::string, std::string>> parts;
-    std::size_t received = 0;
-    bool buffer_full = false, too_many = false;
-    const bool complete = reader(
-        [&](const httplib::MultipartFormData& part) {
-          if (parts.size() >= kMaxUploadFiles) return !(too_many = true);
-          parts.emplace_back(part.filename.empty() ? part.name : part.filename, std::string());
-          return true;
-        },
-        [&](const char* data, std::size_t size) {
-          received += size;
-          if (received > length || !buffered.hold(received)) return !(buffer_full = true);
-          parts.back().second.append(data, size);
-          return true;
-        });
-    if (buffer_full) throw upload_buffer_full();
-    if (too_many) throw HttpError(400, "malformed_mesh", "an upload of files has at most " + std::to_string(kMaxUploadFiles) + " parts");
-    body_read = complete;
-    if (!complete) throw HttpError(400, "malformed_mesh", "the multipart upload is malformed or ended early");
-    auto is_gltf = [](const std::string& name) {
-      return name.size() > 5 && std::equal(name.end() - 5, name.end(), ".gltf", [](char a, char b) { return std::tolower(a) == b; });
-    };
-    const auto documents = std::count_if(parts.begin(), parts.end(), [&](const auto& p) { return is_gltf(p.first); });
-    if (documents != 1)
-      throw HttpError(415, "unsupported_format", "an upload of files takes one .gltf file and the files it names (" +
-                                                     std::to_string(documents) + " .gltf files were sent)");
-    const auto document = std::find_if(parts.begin(), parts.end(), [&](const auto& p) { return is_gltf(p.first); });
-    const std::string gltf = std::move(document->second);
-    parts.erase(document);
-    return pack_gltf_files(gltf, parts);
-  }
-
   void upload(const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader, bool& body_read) {
     // The head is checked before the body is read. Whatever is refused, a body left unread ends
     // the connection (server/transport.cpp), so its bytes are never parsed as a next request.
-    const UploadHead head = check_upload_head(req);
-    const std::size_t length = head.length;
-    std::optional<MeshFormat> format = head.format;
-    ByteHold buffered(upload_buffer);
-    if (!buffered.hold(std::min(length, kUploadChunkBytes))) throw upload_buffer_full();
-
-    // The bytes are kept as uploaded: the store holds them so the mesh can be prepared again.
-    auto upload = std::make_shared<StoredUpload>();
-    if (head.files) {
-      upload->bytes = read_gltf_files(reader, length, buffered, body_read);
-      format = upload->bytes.rfind("glTF", 0) == 0 ? MeshFormat::glb : MeshFormat::gltf;
-    }
-    std::string& body = upload->bytes;
-    body.reserve(std::min(length, kUploadChunkBytes));
-    bool buffer_full = false;
-    const bool complete = head.files || reader([&](const char* data, std::size_t size) {
-      if (body.size() + size > length) return false;
-      // Grown as bytes arrive, and held by capacity: what the string has really allocated.
-      if (body.size() + size > body.capacity()) {
-        const std::size_t capacity = std::min(length, std::max(body.size() + size, 2 * body.capacity()));
-        if (!buffered.hold(capacity)) return !(buffer_full = true);
-        body.reserve(capacity);
-      }
-      body.append(data, size);
-      return true;
-    });
-    if (buffer_full) throw upload_buffer_full();
-    if (!head.files) body_read = complete && body.size() == length;
-    if (!body_read) {
-      throw HttpError(400, "malformed_mesh", "the upload ended after " + std::to_string(body.size()) + " of " +
-                                                 std::to_string(length) + " bytes");
-    }
-    if (!format) format = sniff_mesh_format(body);
-    if (!format)
-      throw HttpError(415, "unsupported_format",
-                      "could not tell the mesh format from its bytes; pass ?format=obj|off|ply|stl|glb|gltf|drc");
-    upload->format = *format;
-    upload->uploaded_at_unix_s = std::int64_t(std::time(nullptr));
+    const UploadHead head = uploads.check_head(req);
+    ByteHold held(uploads.buffer());
+    const std::shared_ptr<StoredUpload> upload = uploads.read(head, reader, held, body_read);
     if (hand_off_requested(req)) return hand_off(*upload, res);
 
-    MeshSession session = run_on_pool([this, upload = std::shared_ptr<const StoredUpload>(upload), limits = read_limits](
-                                          const Cancellation* cancel) {
-      return prepare_session(upload->bytes, upload->format, limits, cancel, pool);
-    });
+    MeshSession session = jobs.prepare(upload, read_limits);
     const std::size_t needed = session.bytes;
     auto stored = sessions.create(std::move(session), *upload);  // a full or unreachable store: 503, nothing kept
     if (!stored)
       throw HttpError(413, "payload_too_large",
                       "the prepared mesh needs " + std::to_string(needed >> 20) + " MiB, more than the cache's whole budget of " +
                           std::to_string(options.cache_mb) + " MiB");
-    res.set_header("Location", "/v1/meshes/" + (*stored)->id);
+    res.set_header("Location", std::string(kMeshesPath) + "/" + (*stored)->id);
     write_json(res, 201, describe(**stored));
   }
 
@@ -784,7 +601,7 @@ struct FeaturelineServer::Impl {
     }
     if (!found.session)
       throw StoreUnavailableError("the upload store lost the upload " + quote_client_text(id) + " before it was prepared; upload it again");
-    res.set_header("Location", "/v1/meshes/" + found.session->id);
+    res.set_header("Location", std::string(kMeshesPath) + "/" + found.session->id);
     write_json(res, 201, describe(*found.session));
   }
 
@@ -802,185 +619,57 @@ struct FeaturelineServer::Impl {
     // The field the engine reads (engine/curvature.h), not the one-ring mean curvature H: on a
     // noisy scan H is mostly noise, and the page snaps keys to this field's extremes.
     const auto h = dominant_curvatures(session->mesh->curvature());
-    if (accepts(req, "application/octet-stream")) {
-      static_assert(sizeof(float) == 4, "float32 output");
-      std::string bytes(h.size() * 4, '\0');
+    if (accepts(req, kOctetStream)) {
+      static_assert(sizeof(float) == sizeof(std::uint32_t), "float32 output");
+      std::string bytes(h.size() * sizeof(float), '\0');
       for (std::size_t i = 0; i < h.size(); ++i) {
         const float f = float(h[i]);
         std::uint32_t bits;
-        std::memcpy(&bits, &f, 4);
-        for (int b = 0; b < 4; ++b) bytes[4 * i + b] = char((bits >> (8 * b)) & 0xFF);  // little-endian
+        std::memcpy(&bits, &f, sizeof bits);
+        for (std::size_t b = 0; b < sizeof bits; ++b) bytes[sizeof bits * i + b] = char((bits >> (8 * b)) & 0xFF);  // little-endian
       }
-      res.set_content(std::move(bytes), "application/octet-stream");
+      res.set_content(std::move(bytes), kOctetStream);
       return;
     }
     write_json(res, 200, {{"vertices", h.size()}, {"curvature", h}});
   }
 
-  // Lines run in parallel on the pool; each job shares the immutable mesh.
-  // The batch shares one Cancellation with the request's deadline: work stops when the deadline
-  // passes, and when the batch is refused or a line fails, its other lines stop too instead of
-  // holding workers for an answer nobody will read.
-  // Where a batch's time went: waiting for an engine thread (the longest wait of its lines) and
-  // computing (the lines' engine time, summed). Answered as a Server-Timing header, so a client
-  // tells a busy server from an expensive request.
-  struct BatchTiming {
-    double queue_ms = 0, engine_ms = 0;
-  };
-
-  std::vector<FeatureLineResult> run_lines(const std::shared_ptr<const MeshSession>& session,
-                                           const std::vector<FeatureLineRequest>& lines, BatchTiming* timing = nullptr) {
-    const auto deadline = request_deadline();
-    const auto cancel = std::make_shared<Cancellation>(deadline);
-    struct CancelUnlessDone {
-      std::shared_ptr<Cancellation> cancel;
-      bool done = false;
-      ~CancelUnlessDone() {
-        if (!done) cancel->cancel();
-      }
-    } guard{cancel};
-    using Timed = std::pair<FeatureLineResult, double>;  // the line, and its wait for a thread in ms
-    std::vector<std::future<Timed>> futures;
-    for (auto line : lines) {
-      line.cancel = cancel.get();
-      futures.push_back(submit_or_503([session, line, cancel, queued = Clock::now()] {
-        const double waited = std::chrono::duration<double, std::milli>(Clock::now() - queued).count();
-        return Timed{detect_feature_line(*session->mesh, line), waited};
-      }));
-    }
-    std::vector<FeatureLineResult> results;
-    for (auto& f : futures) {
-      if (f.wait_until(deadline) != std::future_status::ready) throw_past_deadline();
-      auto [result, waited] = f.get();
-      if (timing != nullptr) {
-        timing->queue_ms = std::max(timing->queue_ms, waited);
-        timing->engine_ms += result.timings.total_ms;
-      }
-      results.push_back(std::move(result));
-    }
-    guard.done = true;
-    return results;
-  }
-
-  // The JSON body of a POST, checked for type and size.
-  // A JSON request body: its text and its DOM counted against json_memory while the request
-  // holds them, so concurrent bodies share one bound.
-  struct JsonBody {
-    explicit JsonBody(ByteAccount& account) : held(account) {}
-    std::string text;
-    ByteHold held;
-  };
-
-  // A POST route with a JSON body: the body is read here, by bytes received, within 4 MiB and
-  // the shared budget; a body left unread closes the connection (the transport does), so say so.
-  template <typename Handler>
-  void post_json(const std::string& pattern, const char* route, Handler handler) {
-    http.Post(pattern, [this, route, handler](const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
-      request_route = route;
-      bool body_read = false;
-      try {
-        JsonBody body(json_memory);
-        body_read = read_json_text(reader, body);
-        handler(req, body, res);
-      } catch (...) {
-        write_error(res, error_reply(std::current_exception()));
-        if (!body_read) res.set_header("Connection", "close");
-      }
-    });
-  }
-
-  HttpError json_memory_full() {
-    metrics.record_rejected("json_memory_full");
-    return HttpError(503, "overloaded", "request bodies being parsed already hold " + std::to_string(json_memory.used() >> 20) +
-                                            " MiB of the " + std::to_string(json_memory.capacity() >> 20) + " MiB they may; retry shortly",
-                     {{"Retry-After", "1"}});
-  }
-
-  // Reads the body into body.text; true when it was read whole. \throw HttpError 413, 503
-  bool read_json_text(const httplib::ContentReader& reader, JsonBody& body) {
-    bool too_large = false, full = false;
-    const bool complete = reader([&](const char* data, std::size_t size) {
-      if (body.text.size() + size > kMaxJsonBytes) return !(too_large = true);
-      if (body.text.size() + size > body.text.capacity()) {
-        const std::size_t capacity = std::min(kMaxJsonBytes, std::max(body.text.size() + size, 2 * body.text.capacity()));
-        if (!body.held.hold(capacity)) return !(full = true);
-        body.text.reserve(capacity);
-      }
-      body.text.append(data, size);
-      return true;
-    });
-    if (too_large)
-      throw HttpError(413, "payload_too_large", "the request body exceeds " + std::to_string(kMaxJsonBytes >> 20) + " MiB");
-    if (full) throw json_memory_full();
-    if (!complete) throw HttpError(400, "invalid_request", "the request body ended early");
-    return true;
-  }
-
-  // The body as a JSON object, its DOM's size checked against the text's and held as well.
-  json json_body(const httplib::Request& req, JsonBody& body) {
-    const std::string type = media_type(req.get_header_value("Content-Type"));
-    if (!type.empty() && type != "application/json")
-      throw HttpError(415, "unsupported_format",
-                      "send the request as application/json (curl: -H 'Content-Type: application/json'), not \"" + type + "\"");
-    const JsonShape shape = measure_json(body.text);
-    check_json_shape(body.text.size(), shape);
-    if (!body.held.hold(body.text.capacity() + shape.dom_bytes())) throw json_memory_full();
-    json parsed = json::parse(body.text);
-    if (!parsed.is_object()) throw InvalidInputError("the request body must be a JSON object");
-    return parsed;
-  }
-
-  // The answer's format: ?format= (a name of api/export_formats.h) wins over Accept (the formats
-  // with a type of their own); JSON otherwise. \throw HttpError 400 for a format `content` lacks
-  static ExportFormat answer_format(const httplib::Request& req, ExportContent content) {
-    if (req.has_param("format")) {
-      const auto format = parse_export_format(req.get_param_value("format"));
-      if (!format || !can_export(*format, content))
-        throw HttpError(400, "invalid_request", "format must be " + export_format_names(content));
-      return *format;
-    }
-    for (const auto& row : export_format_table()) {
-      const bool own_type = std::string_view(row.mime_type) != "text/plain" && row.format != ExportFormat::json;
-      if (own_type && can_export(row.format, content) && accepts(req, row.mime_type)) return row.format;
-    }
-    return ExportFormat::json;
-  }
-
   void segmentation(const httplib::Request& req, JsonBody& request_body, httplib::Response& res) {
     auto session = session_or_404(req.matches[1]);
     const ExportFormat format = answer_format(req, ExportContent::segmentation);
-    SegmentationRequest request = parse_segmentation_request(json_body(req, request_body), *session->mesh);
+    SegmentationRequest request = parse_segmentation_request(json_bodies.parse(req, request_body), *session->mesh);
     const SegmentationOptions segmentation_options = request.options;
     // Items are line requests (detected here) or lines the client already has (computed once).
     std::vector<FeatureLineResult> detected;
-    if (!request.requests.empty()) detected = run_lines(session, request.requests);
+    if (!request.requests.empty()) detected = jobs.run_lines(session, request.requests);
     const auto results = std::move(request).lines_with(std::move(detected));
-    const SegmentationResult segments = run_on_pool([session, results, segmentation_options](const Cancellation* cancel) {
+    const SegmentationResult segments = jobs.run([session, results, segmentation_options](const Cancellation* cancel) {
       return segment_mesh(*session->mesh, results, segmentation_options, cancel);
     });
+    const char* type = export_format_info(format).mime_type;
     if (format == ExportFormat::json) write_json(res, 200, segmentation_to_json(segments, segmentation_options.mode));
-    else if (format == ExportFormat::glb) res.set_content(segmentation_to_glb(*session->mesh, segments), "model/gltf-binary");
-    else res.set_content(export_segmentation(*session->mesh, segments, format), export_format_info(format).mime_type);
+    else if (format == ExportFormat::glb) res.set_content(segmentation_to_glb(*session->mesh, segments), type);
+    else res.set_content(export_segmentation(*session->mesh, segments, format), type);
   }
 
   void feature_lines(const httplib::Request& req, JsonBody& request_body, httplib::Response& res) {
     auto session = session_or_404(req.matches[1]);
     const ExportFormat answer = answer_format(req, ExportContent::lines);
     bool batch = false;
-    const std::vector<FeatureLineRequest> lines = parse_feature_line_body(json_body(req, request_body), *session->mesh, batch);
-    request_body.text = std::string();  // the keys are all a line needs from here on
-    request_body.held.hold(0);
+    const std::vector<FeatureLineRequest> lines = parse_feature_line_body(json_bodies.parse(req, request_body), *session->mesh, batch);
+    request_body.release();  // the keys are all a line needs from here on
     BatchTiming timing;
-    const std::vector<FeatureLineResult> results = run_lines(session, lines, &timing);
+    const std::vector<FeatureLineResult> results = jobs.run_lines(session, lines, &timing);
     char server_timing[96];
     std::snprintf(server_timing, sizeof server_timing, "queue;dur=%.3f, engine;dur=%.3f", timing.queue_ms, timing.engine_ms);
     res.set_header("Server-Timing", server_timing);
+    const char* type = export_format_info(answer).mime_type;
     if (answer == ExportFormat::glb) {
-      res.set_content(feature_line_to_glb(*session->mesh, results, false), "model/gltf-binary");
+      res.set_content(feature_line_to_glb(*session->mesh, results, false), type);
     } else if (answer == ExportFormat::gltf) {
-      res.set_content(feature_line_to_gltf_json(*session->mesh, results, false), "model/gltf+json");
+      res.set_content(feature_line_to_gltf_json(*session->mesh, results, false), type);
     } else if (answer != ExportFormat::json) {
-      res.set_content(export_lines(results, answer), export_format_info(answer).mime_type);
+      res.set_content(export_lines(results, answer), type);
     } else if (batch) {
       json out = json::array();
       for (const auto& r : results) out.push_back(feature_line_to_json(r));
