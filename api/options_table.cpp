@@ -46,9 +46,17 @@ std::string dotted_to_pointer(const std::string& dotted) {
   return pointer;
 }
 
+json::json_pointer option_pointer(const std::string& name) { return json::json_pointer("/" + dotted_to_pointer(name)); }
+
 void throw_not_an_object(const std::string& where) { throw InvalidInputError("\"" + where + "\" must be a JSON object"); }
 
 void throw_unknown_option(const std::string& where) { throw InvalidInputError("unknown option \"" + where + "\""); }
+
+void throw_option_given_twice(const std::string& first, const std::string& second, const std::string& current) {
+  const bool current_first = first == current;
+  throw InvalidInputError("\"" + (current_first ? second : first) + "\" and \"" + (current_first ? first : second) +
+                          "\" name the same option: give only \"" + current + "\"");
+}
 
 json check_option_value(const OptionSpec& spec, const json& value, const std::string& where) {
   const std::string field = "\"" + where + "\"";
@@ -104,6 +112,7 @@ json describe_options(const std::vector<OptionSpec>& specs) {
     }
     if (spec.kind == OptionKind::choice) row["enum"] = spec.choices;
     if (!spec.cli_flag.empty()) row["cli_flag"] = spec.cli_flag;
+    if (!spec.old_names.empty()) row["old_names"] = spec.old_names;
     rows.push_back(row);
   }
   return rows;
@@ -130,34 +139,41 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
   using I = InitialLineOptions;
   using S = SnakeOptions;
   static const OptionTable<O> table = {
-      option<O>("initial", {}, "How the initial line between keys is found: the paper's marching search, "
-                "a path along the strongest edges, or the shortest path", "--initial", &O::initial, &I::method),
-      option<O>("weights.alpha", {0, 1000}, "Marching weight of heading from the start key to the end key (Eq. 10)", "",
-                &O::initial, &I::marching_alpha),
-      option<O>("weights.beta", {0, 1000}, "Marching weight of keeping the previous step's direction (Eq. 10)", "",
-                &O::initial, &I::marching_beta),
-      option<O>("weights.gamma", {0, 1000}, "Marching weight of getting closer to the end key (Eq. 10)", "",
-                &O::initial, &I::marching_gamma),
-      option<O>("weights.delta", {0, 1000}, "Marching weight of the curvature term f_C (Eq. 10)", "", &O::initial,
-                &I::marching_delta),
-      option<O>("curvature_term", {}, "What the marching search's f_C compares: the current vertex, the end key, or "
-                "curvature magnitude", "--curvature-term", &O::initial, &I::marching_curvature_term),
-      option<O>("fallback", {}, "Use feature-path for a segment the marching search cannot finish", "--no-fallback",
-                &O::initial, &I::fallback),
-      option<O>("feature_weight_floor", {1e-4, 1}, "feature-path edge cost on the strongest features, relative to "
-                "featureless edges (1: geodesic)", "", &O::initial, &I::feature_weight_floor),
-      option<O>("sign_aware", {}, "Follow only ridges or only valleys when every key agrees in sign", "", &O::initial,
-                &I::sign_aware),
-      option<O>("max_line_edges", {1, 1000}, "Lines longer than this many edges are refused (split them): every "
-                "stage's work grows with the length", "", &O::initial, &I::max_edges),
-      option<O>("rings", within(StripOptions::rings_range), "Rings of faces around the initial line in the feature strip (0: from the line's "
-                "length, 2 to 8)", "--rings", &O::strip, &StripOptions::rings),
-      option<O>("dense_line_edges", {1, 1000}, "Automatic rings: lines of this many edges get 3 rings, twice as many 4, "
-                "four times 6, eight times 8", "", &O::strip, &StripOptions::dense_line_edges),
-      option<O>("flattening", {}, "How the strip is laid out in the plane: the paper's similar triangles, a conformal "
-                "map, or the paper's where it keeps 95% of the strip (97% on noisy meshes)", "--flattening", &O::strip, &StripOptions::flattening),
-      option<O>("max_edge_distortion", {0.01, 100}, "Flattened triangles whose edges stretch by more than this "
-                "fraction are left out of the snake's domain", "", &O::strip, &StripOptions::max_edge_distortion),
+      // Rows renamed to their member paths keep their old paths for one release (docs/options.md).
+      formerly({"initial"}, option<O>("initial.method", {}, "How the initial line between keys is found: the paper's "
+                "marching search, a path along the strongest edges, or the shortest path", "--initial", &O::initial, &I::method)),
+      formerly({"weights.alpha"}, option<O>("initial.marching_alpha", {0, 1000}, "Marching weight of heading from the "
+                "start key to the end key (Eq. 10)", "", &O::initial, &I::marching_alpha)),
+      formerly({"weights.beta"}, option<O>("initial.marching_beta", {0, 1000}, "Marching weight of keeping the previous "
+                "step's direction (Eq. 10)", "", &O::initial, &I::marching_beta)),
+      formerly({"weights.gamma"}, option<O>("initial.marching_gamma", {0, 1000}, "Marching weight of getting closer to "
+                "the end key (Eq. 10)", "", &O::initial, &I::marching_gamma)),
+      formerly({"weights.delta"}, option<O>("initial.marching_delta", {0, 1000}, "Marching weight of the curvature term "
+                "f_C (Eq. 10)", "", &O::initial, &I::marching_delta)),
+      formerly({"curvature_term"}, option<O>("initial.marching_curvature_term", {}, "What the marching search's f_C "
+                "compares: the current vertex, the end key, or curvature magnitude", "--curvature-term", &O::initial,
+                &I::marching_curvature_term)),
+      formerly({"fallback"}, option<O>("initial.fallback", {}, "Use feature-path for a segment the marching search "
+                "cannot finish", "--no-fallback", &O::initial, &I::fallback)),
+      formerly({"feature_weight_floor"}, option<O>("initial.feature_weight_floor", {1e-4, 1}, "feature-path edge cost "
+                "on the strongest features, relative to featureless edges (1: geodesic)", "", &O::initial,
+                &I::feature_weight_floor)),
+      formerly({"sign_aware"}, option<O>("initial.sign_aware", {}, "Follow only ridges or only valleys when every key "
+                "agrees in sign", "", &O::initial, &I::sign_aware)),
+      formerly({"max_line_edges"}, option<O>("initial.max_edges", {1, 1000}, "Lines longer than this many edges are "
+                "refused (split them): every stage's work grows with the length", "", &O::initial, &I::max_edges)),
+      formerly({"rings"}, option<O>("strip.rings", within(StripOptions::rings_range), "Rings of faces around the "
+                "initial line in the feature strip (0: from the line's length, 2 to 8)", "--rings", &O::strip,
+                &StripOptions::rings)),
+      formerly({"dense_line_edges"}, option<O>("strip.dense_line_edges", {1, 1000}, "Automatic rings: lines of this "
+                "many edges get 3 rings, twice as many 4, four times 6, eight times 8", "", &O::strip,
+                &StripOptions::dense_line_edges)),
+      formerly({"flattening"}, option<O>("strip.flattening", {}, "How the strip is laid out in the plane: the paper's "
+                "similar triangles, a conformal map, or the paper's where it keeps 95% of the strip (97% on noisy "
+                "meshes)", "--flattening", &O::strip, &StripOptions::flattening)),
+      formerly({"max_edge_distortion"}, option<O>("strip.max_edge_distortion", {0.01, 100}, "Flattened triangles whose "
+                "edges stretch by more than this fraction are left out of the snake's domain", "", &O::strip,
+                &StripOptions::max_edge_distortion)),
       option<O>("refine", {}, "Refine the initial line with the snake", "--no-refine", &O::refine),
       option<O>("pin_interior_keys", {}, "Interior keys stay where they are placed", "--free-keys", &O::pin_interior_keys),
       option<O>("min_piece_edges", within(O::min_piece_edges_range, kEngineEnd, 1000), "A strip that folds over is split in two until pieces are this short "
@@ -214,7 +230,7 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
       option<O>("trace.sign", {}, "A line traced from one key follows: a crease's sign near the key, else the larger "
                 "curvature's (auto), or ridges or valleys only", "--trace-sign", &O::trace, &TraceOptions::sign),
       option<O>("trace.max_edges", within(TraceOptions::max_edges_range, kEngineEnd, 1000), "Traced lines: the longest, "
-                "in edges (also within max_line_edges)", "", &O::trace, &TraceOptions::max_edges),
+                "in edges (also within initial.max_edges)", "", &O::trace, &TraceOptions::max_edges),
       option<O>("trace.stop_strength", within(TraceOptions::stop_strength_range), "Traced lines: the trace ends where the "
                 "feature falls below this share of its strength at the key", "", &O::trace, &TraceOptions::stop_strength),
       option<O>("trace.min_signal_to_noise", within(TraceOptions::min_signal_to_noise_range), "Traced lines: ... or below "
@@ -240,7 +256,8 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 &S::curvature_cap),
       option<O>("snake.max_step", within(S::max_step_range, 1e-3, kSnakeMaxStepCap), "Largest move of a point in one iteration (edge lengths)", "", &O::snake,
                 &S::max_step),
-      option<O>("snake.iterations", within(S::max_iterations_range, kEngineEnd, kSnakeIterationsCap), "Iteration cap per piece", "--iterations", &O::snake, &S::max_iterations),
+      formerly({"snake.iterations"}, option<O>("snake.max_iterations", within(S::max_iterations_range, kEngineEnd,
+                kSnakeIterationsCap), "Iteration cap per piece", "--iterations", &O::snake, &S::max_iterations)),
       option<O>("snake.featureless_below", within(S::featureless_below_range, kEngineEnd, 4), "A strip whose 90th percentile of "
                 "feature strength (in units of the mesh's 90th percentile of |C|) is below this has no feature: its snake "
                 "only smooths the line (0: off)", "", &O::snake, &S::featureless_below),

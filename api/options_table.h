@@ -1,4 +1,5 @@
-// One table per options struct: each row names a JSON field, the struct member behind it, its
+// One table per options struct: each row names a JSON field (the path of the struct member behind
+// it, so JSON, code and docs use one name), the member, its
 // type, default, limits (or accepted names) and what it does. The same rows drive JSON parsing
 // (with exact errors), JSON output of the effective options, range checks of options built in
 // code, the CLI's flags and help, and the description served at GET /v1/options that the page
@@ -34,7 +35,9 @@ enum class OptionKind { number, integer, boolean, choice };
 
 /// What one option accepts, as the API describes it.
 struct OptionSpec {
-  std::string name;  ///< JSON path below the options object, parts joined by '.' ("snake.iterations")
+  /// JSON path below the options object, parts joined by '.': the member's path in the options
+  /// struct ("snake.max_iterations" is SnakeOptions::max_iterations in FeatureLineOptions::snake).
+  std::string name;
   OptionKind kind = OptionKind::number;
   double minimum = 0, maximum = 0;   ///< number and integer
   /// What the engine itself accepts, for options it checks (engine/valid_range.h): the row's
@@ -42,6 +45,9 @@ struct OptionSpec {
   std::optional<ValidRange> engine_range;
   std::vector<std::string> choices;  ///< choice: the accepted names
   std::vector<std::string> aliases;  ///< choice: older names still accepted, never printed
+  /// Paths the option had before `name`, still accepted in requests until the next release (a
+  /// request giving one of them and `name` is refused); never printed in effective options.
+  std::vector<std::string> old_names;
   nlohmann::json default_value;      ///< the struct's default, as JSON
   std::string description;           ///< one line
   /// The CLI flag setting it, "" for none. A boolean flag sets the opposite of the default.
@@ -80,13 +86,19 @@ nlohmann::json check_option_value(const OptionSpec& spec, const nlohmann::json& 
 
 /// "prefix.name", or "name" when the prefix is empty.
 std::string option_path(const std::string& prefix, const std::string& name);
-/// "snake.iterations" -> "snake/iterations" (a JSON pointer without its leading '/').
+/// "snake.max_iterations" -> "snake/max_iterations" (a JSON pointer without its leading '/').
 std::string dotted_to_pointer(const std::string& dotted);
+/// Where the option named `name` sits in a JSON object: "snake.tau" -> /snake/tau.
+nlohmann::json::json_pointer option_pointer(const std::string& name);
 [[noreturn]] void throw_not_an_object(const std::string& where);
 [[noreturn]] void throw_unknown_option(const std::string& where);
+/// A request named one option by two paths (an old name and the current one): `current` is the
+/// one to keep.
+[[noreturn]] void throw_option_given_twice(const std::string& first, const std::string& second, const std::string& current);
 
 /// The table as the API describes it: [{"name", "type", "default", "minimum", "maximum" | "enum",
-/// "description"}] (JSON Schema's words, so it compares directly with api/openapi.yaml).
+/// "description", "cli_flag", "old_names"}] (JSON Schema's words, so it compares directly with
+/// api/openapi.yaml); "cli_flag" and "old_names" only where a row has them.
 nlohmann::json describe_options(const std::vector<OptionSpec>& specs);
 
 template <typename Options>
@@ -96,17 +108,23 @@ std::vector<OptionSpec> option_specs(const OptionTable<Options>& table) {
   return specs;
 }
 
-/// Applies a JSON object onto `options`. Nested objects follow the dotted names; unknown fields,
-/// wrong types and values out of range are an InvalidInputError naming the field by its path
-/// below `prefix` (e.g. "options.snake.iterations").
+/// Applies a JSON object onto `options`. Nested objects follow the dotted names, current or old;
+/// unknown fields, wrong types, values out of range and an option given by two names are an
+/// InvalidInputError naming the field by the path the object used, below `prefix` (e.g.
+/// "options.snake.max_iterations", or "options.snake.iterations" for a request using the old name).
 template <typename Options>
 void apply_options(const OptionTable<Options>& table, const nlohmann::json& object, const std::string& prefix, Options& options);
 
-/// Every option's current value, as the nested JSON object apply_options reads.
+/// The options of `object` (checked as apply_options checks them) under their current names only,
+/// so it can be merged with other options objects (the CLI's flags over a request's options).
+template <typename Options>
+nlohmann::json with_current_names(const OptionTable<Options>& table, const nlohmann::json& object, const std::string& prefix);
+
+/// Every option's current value, as the nested JSON object apply_options reads (current names).
 template <typename Options>
 nlohmann::json options_json(const OptionTable<Options>& table, const Options& options) {
   nlohmann::json out = nlohmann::json::object();
-  for (const auto& field : table) out[nlohmann::json::json_pointer("/" + dotted_to_pointer(field.spec.name))] = field.read(options);
+  for (const auto& field : table) out[option_pointer(field.spec.name)] = field.read(options);
   return out;
 }
 
@@ -195,35 +213,78 @@ OptionField<Options> option(const char* name, OptionRange range, const char* des
   return field;
 }
 
-// ---- parsing -------------------------------------------------------------------------------------
-/// The row named `name`, null when none; `is_group` tells whether rows exist below "name.".
+/// `field` still accepted under the paths it had before it was renamed (OptionSpec::old_names).
 template <typename Options>
-const OptionField<Options>* find_option(const OptionTable<Options>& table, const std::string& name, bool& is_group) {
-  is_group = false;
-  for (const auto& field : table) {
-    if (field.spec.name == name) return &field;
-    if (field.spec.name.compare(0, name.size() + 1, name + ".") == 0) is_group = true;
-  }
-  return nullptr;
+OptionField<Options> formerly(std::vector<std::string> old_names, OptionField<Options> field) {
+  field.spec.old_names = std::move(old_names);
+  return field;
 }
 
+// ---- parsing -------------------------------------------------------------------------------------
+/// The row a request's path names, by its current or an old name; null when none. `is_group`
+/// tells whether names (current or old) exist below "path.": an old leaf name can be a group now
+/// ("initial" was the method and now holds it with the other initial-line options).
 template <typename Options>
-void apply_options_below(const OptionTable<Options>& table, const nlohmann::json& object, const std::string& group,
-                         const std::string& prefix, Options& options) {
+const OptionField<Options>* find_option(const OptionTable<Options>& table, const std::string& path, bool& is_group) {
+  is_group = false;
+  const OptionField<Options>* found = nullptr;
+  const auto check = [&](const OptionField<Options>& field, const std::string& name) {
+    if (name == path) found = &field;
+    else if (name.compare(0, path.size() + 1, path + ".") == 0) is_group = true;
+  };
+  for (const auto& field : table) {
+    check(field, field.spec.name);
+    for (const auto& old : field.spec.old_names) check(field, old);
+  }
+  return found;
+}
+
+/// Walks `object` (see for_each_option) below `group`; `given` holds the path each row was given by.
+template <typename Options, typename Visit>
+void for_each_option_below(const OptionTable<Options>& table, const nlohmann::json& object, const std::string& group,
+                           const std::string& prefix, std::vector<std::pair<const OptionField<Options>*, std::string>>& given,
+                           const Visit& visit) {
   if (!object.is_object()) throw_not_an_object(option_path(prefix, group));
   for (auto it = object.begin(); it != object.end(); ++it) {
     const std::string name = group.empty() ? it.key() : group + "." + it.key();
     bool is_group = false;
     const OptionField<Options>* field = find_option(table, name, is_group);
-    if (field != nullptr) field->write(options, check_option_value(field->spec, it.value(), option_path(prefix, name)));
-    else if (is_group) apply_options_below(table, it.value(), name, prefix, options);
-    else throw_unknown_option(option_path(prefix, name));
+    // Where a name is both an old leaf and a group, the value's shape says which is meant.
+    if (is_group && (field == nullptr || it.value().is_object())) {
+      for_each_option_below(table, it.value(), name, prefix, given, visit);
+      continue;
+    }
+    if (field == nullptr) throw_unknown_option(option_path(prefix, name));
+    const std::string path = option_path(prefix, name);
+    for (const auto& [row, first] : given)
+      if (row == field) throw_option_given_twice(first, path, option_path(prefix, field->spec.name));
+    given.emplace_back(field, path);
+    visit(*field, check_option_value(field->spec, it.value(), path));
   }
+}
+
+/// Calls visit(field, value) for each option `object` gives, by current or old name, its value
+/// checked and named in errors by the path the object used below `prefix`.
+template <typename Options, typename Visit>
+void for_each_option(const OptionTable<Options>& table, const nlohmann::json& object, const std::string& prefix, const Visit& visit) {
+  std::vector<std::pair<const OptionField<Options>*, std::string>> given;
+  for_each_option_below(table, object, "", prefix, given, visit);
 }
 
 template <typename Options>
 void apply_options(const OptionTable<Options>& table, const nlohmann::json& object, const std::string& prefix, Options& options) {
-  apply_options_below(table, object, "", prefix, options);
+  for_each_option(table, object, prefix, [&options](const OptionField<Options>& field, const nlohmann::json& value) {
+    field.write(options, value);
+  });
+}
+
+template <typename Options>
+nlohmann::json with_current_names(const OptionTable<Options>& table, const nlohmann::json& object, const std::string& prefix) {
+  nlohmann::json out = nlohmann::json::object();
+  for_each_option(table, object, prefix, [&out](const OptionField<Options>& field, const nlohmann::json& value) {
+    out[option_pointer(field.spec.name)] = value;
+  });
+  return out;
 }
 
 }  // namespace featureline

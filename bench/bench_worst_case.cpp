@@ -35,13 +35,13 @@ const OptionSpec& spec_of(const std::string& name) {
 // resampling every iteration, the shortest pieces, and every triangle in the snake's domain.
 FeatureLineOptions options_at_caps(bool strong_force) {
   FeatureLineOptions o;
-  o.snake.max_iterations = int(spec_of("snake.iterations").maximum);
+  o.snake.max_iterations = int(spec_of("snake.max_iterations").maximum);
   o.snake.tolerance = spec_of("snake.tolerance").minimum;
   o.snake.spacing = spec_of("snake.spacing").minimum;
   o.snake.resample_every = int(spec_of("snake.resample_every").minimum);
-  o.strip.rings = int(spec_of("rings").maximum);
+  o.strip.rings = int(spec_of("strip.rings").maximum);
   o.min_piece_edges = int(spec_of("min_piece_edges").minimum);
-  o.strip.max_edge_distortion = spec_of("max_edge_distortion").maximum;
+  o.strip.max_edge_distortion = spec_of("strip.max_edge_distortion").maximum;
   if (strong_force) {  // an extreme force once made the snake add points without bound
     o.snake.kappa = spec_of("snake.kappa").maximum;
     o.snake.exponent = spec_of("snake.exponent").maximum;
@@ -142,12 +142,12 @@ int main(int argc, char** argv) {
     else meshes.push_back(arg);
   }
   if (meshes.empty()) meshes.push_back(std::string(FEATURELINE_SHARED_DIR) + "/data/meshes/igea.ply");
-  std::printf("Worst case per line at the option caps (snake.iterations %g, tolerance %g, spacing %g, resample_every %g,\n"
-              "rings %g, min_piece_edges %g, max_edge_distortion %g; 'strong' adds kappa %g, exponent %g, max_step %g),\n"
+  std::printf("Worst case per line at the option caps (snake.max_iterations %g, tolerance %g, spacing %g, resample_every %g,\n"
+              "strip.rings %g, min_piece_edges %g, strip.max_edge_distortion %g; 'strong' adds kappa %g, exponent %g, max_step %g),\n"
               "at most %zu keys per line. Times: median and max of %d runs; load average at start %.2f.\n\n",
-              spec_of("snake.iterations").maximum, spec_of("snake.tolerance").minimum, spec_of("snake.spacing").minimum,
-              spec_of("snake.resample_every").minimum, spec_of("rings").maximum, spec_of("min_piece_edges").minimum,
-              spec_of("max_edge_distortion").maximum, spec_of("snake.kappa").maximum, spec_of("snake.exponent").maximum,
+              spec_of("snake.max_iterations").maximum, spec_of("snake.tolerance").minimum, spec_of("snake.spacing").minimum,
+              spec_of("snake.resample_every").minimum, spec_of("strip.rings").maximum, spec_of("min_piece_edges").minimum,
+              spec_of("strip.max_edge_distortion").maximum, spec_of("snake.kappa").maximum, spec_of("snake.exponent").maximum,
               spec_of("snake.max_step").maximum, RequestLimits::max_keys_per_line, repeat, load_average());
   int status = 0;
   for (const auto& path : meshes) {
@@ -162,7 +162,7 @@ int main(int argc, char** argv) {
       const std::uint32_t start = cases[0].keys.empty() ? 0 : cases[0].keys[0];
       cases.push_back({"2 keys across the mesh", {start, farthest_from(*mesh, start)}});
       // As many keys as fit the longest line, 3 edges apart (the most pieces, each refined alone).
-      const std::size_t max_edges = std::size_t(spec_of("max_line_edges").maximum);
+      const std::size_t max_edges = std::size_t(spec_of("initial.max_edges").maximum);
       cases.push_back({"most keys, 3 edges apart", keys_along_walk(*mesh, start, std::min(RequestLimits::max_keys_per_line, max_edges / 3), 3, rng)});
       // The longest line in pieces of about 12 edges (the snake's points grow with the length).
       cases.push_back({"longest, keys 12 edges apart", keys_along_walk(*mesh, start, max_edges / 12, 12, rng)});

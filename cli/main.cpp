@@ -242,6 +242,12 @@ json key_points(const std::string& text) {
   });
 }
 
+// Options under their current names, so the flags' (current names) merge over them: a flag
+// replaces an option the JSON gave by an old name instead of giving it a second time.
+json line_options_current(const json& options) {
+  return featureline::with_current_names(featureline::feature_line_option_table(), options, "options");
+}
+
 // --options, then the flags over it.
 json flag_options(const LineFlags& f) {
   json options = json::object();
@@ -252,9 +258,11 @@ json flag_options(const LineFlags& f) {
       throw CLI::ValidationError(std::string("--options is not valid JSON: ") + e.what());
     }
     if (!options.is_object()) throw CLI::ValidationError("--options must be a JSON object");
+    options = line_options_current(options);
   }
   if (!f.weights.empty())
-    options["weights"] = {{"alpha", f.weights[0]}, {"beta", f.weights[1]}, {"gamma", f.weights[2]}, {"delta", f.weights[3]}};
+    options["initial"].update({{"marching_alpha", f.weights[0]}, {"marching_beta", f.weights[1]},
+                               {"marching_gamma", f.weights[2]}, {"marching_delta", f.weights[3]}});
   options.merge_patch(f.options);
   return options;
 }
@@ -263,7 +271,8 @@ json flag_options(const LineFlags& f) {
 void merge_line_options(json& line, const json& options) {
   if (options.empty() || !line.is_object() || line.contains("refined")) return;
   json merged = line.value("options", json::object());
-  if (merged.is_object()) merged.merge_patch(options);
+  if (merged.is_object()) merged = line_options_current(merged);
+  merged.merge_patch(options);
   line["options"] = merged;
 }
 

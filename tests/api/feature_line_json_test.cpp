@@ -32,7 +32,7 @@ TEST(FeatureLineJson, FieldNamesAreTheContract) {
 
 TEST(FeatureLineJson, OptionsAreStrict) {
   FeatureLineOptions options;
-  apply_options_json(nlohmann::json::parse(R"({"initial": "marching", "weights": {"delta": 3}, "snake": {"alpha": 0.5, "force": "paper"}})"),
+  apply_options_json(nlohmann::json::parse(R"({"initial": {"method": "marching", "marching_delta": 3}, "snake": {"alpha": 0.5, "force": "paper"}})"),
                      options);
   EXPECT_EQ(options.initial.method, InitialMethod::marching);
   EXPECT_EQ(options.initial.marching_delta, 3);
@@ -48,10 +48,10 @@ TEST(FeatureLineJson, OptionsAreStrict) {
     return std::string("no error");
   };
   EXPECT_EQ(error_of(R"({"snake": {"alpah": 1}})"), "unknown option \"options.snake.alpah\"");
-  EXPECT_EQ(error_of(R"({"initial": "dijkstra"})"),
-            "\"options.initial\" must be one of marching, feature-path, geodesic, not \"dijkstra\"");
-  EXPECT_EQ(error_of(R"({"rings": 2.5})"), "\"options.rings\" must be an integer from 0 to 8");
-  EXPECT_EQ(error_of(R"({"rings": 99})"), "\"options.rings\" must be an integer from 0 to 8");
+  EXPECT_EQ(error_of(R"({"initial": {"method": "dijkstra"}})"),
+            "\"options.initial.method\" must be one of marching, feature-path, geodesic, not \"dijkstra\"");
+  EXPECT_EQ(error_of(R"({"strip": {"rings": 2.5}})"), "\"options.strip.rings\" must be an integer from 0 to 8");
+  EXPECT_EQ(error_of(R"({"strip": {"rings": 99}})"), "\"options.strip.rings\" must be an integer from 0 to 8");
   EXPECT_EQ(error_of(R"([1, 2])"), "\"options\" must be a JSON object");
   // Round trip: the defaults printed are accepted back unchanged.
   FeatureLineOptions defaults;

@@ -1,6 +1,9 @@
 // The option tables (api/options_table.h): every field round-trips JSON -> options -> JSON,
 // limits give exact errors, enum names come from one table, request parsing names the field,
+// renamed options are still read under their old names (and printed only under the new ones),
 // and the limits of options the engine checks are the engine's own ranges (engine/valid_range.h).
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
 #include "api/feature_line_json.h"
@@ -46,13 +49,13 @@ void expect_every_field_round_trips(const OptionTable<Options>& table) {
     SCOPED_TRACE(field.spec.name);
     const json pointer_value = other_value(field.spec);
     json request = json::object();
-    request[json::json_pointer("/" + dotted_to_pointer(field.spec.name))] = pointer_value;
+    request[option_pointer(field.spec.name)] = pointer_value;
     Options options;
     apply_options(table, request, "options", options);
     json written = options_json(table, options);
-    EXPECT_EQ(written[json::json_pointer("/" + dotted_to_pointer(field.spec.name))], pointer_value);
+    EXPECT_EQ(written[option_pointer(field.spec.name)], pointer_value);
     // Only that field changed.
-    written[json::json_pointer("/" + dotted_to_pointer(field.spec.name))] = field.spec.default_value;
+    written[option_pointer(field.spec.name)] = field.spec.default_value;
     EXPECT_EQ(written, defaults);
     // And what was written reads back to the same options.
     Options again;
@@ -69,11 +72,12 @@ TEST(OptionTable, EveryFieldRoundTripsThroughJson) {
 
 TEST(OptionTable, DefaultsAreTheStructsDefaults) {
   const json d = options_to_json(FeatureLineOptions{});
-  EXPECT_EQ(d["snake"]["iterations"], 300);  // SnakeOptions::max_iterations, under its public name
+  EXPECT_EQ(d["snake"]["max_iterations"], 300);  // FeatureLineOptions::snake.max_iterations: names are member paths
   EXPECT_EQ(d["snake"]["spacing"], 0.5);
-  EXPECT_EQ(d["initial"], "feature-path");
-  EXPECT_EQ(d["flattening"], "automatic");
-  EXPECT_EQ(d["dense_line_edges"], 12);  // StripOptions::dense_line_edges, exposed since the table
+  EXPECT_EQ(d["initial"]["method"], "feature-path");
+  EXPECT_EQ(d["initial"]["marching_delta"], 2);
+  EXPECT_EQ(d["strip"]["flattening"], "automatic");
+  EXPECT_EQ(d["strip"]["dense_line_edges"], 12);
   EXPECT_EQ(options_json(segmentation_option_table(), SegmentationOptions{})["mode"], "snap");
   // Every default is within its own limits, so an untouched request always passes.
   for (const auto& field : feature_line_option_table())
@@ -88,30 +92,160 @@ TEST(OptionTable, ErrorsNameTheFieldAndItsLimits) {
       apply_options_json(json::parse(text), o);
     });
   };
-  EXPECT_EQ(error(R"({"snake": {"iterations": 100000}})"), "\"options.snake.iterations\" must be an integer from 0 to 500");
-  EXPECT_EQ(error(R"({"snake": {"iterations": 2.5}})"), "\"options.snake.iterations\" must be an integer from 0 to 500");
+  EXPECT_EQ(error(R"({"snake": {"max_iterations": 100000}})"), "\"options.snake.max_iterations\" must be an integer from 0 to 500");
+  EXPECT_EQ(error(R"({"snake": {"max_iterations": 2.5}})"), "\"options.snake.max_iterations\" must be an integer from 0 to 500");
   EXPECT_EQ(error(R"({"snake": {"spacing": 0.05}})"), "\"options.snake.spacing\" must be a number from 0.25 to 10");
   EXPECT_EQ(error(R"({"snake": {"tau": "fast"}})"), "\"options.snake.tau\" must be a number from 0.0001 to 1000");
-  EXPECT_EQ(error(R"({"rings": 99})"), "\"options.rings\" must be an integer from 0 to 8");
+  EXPECT_EQ(error(R"({"strip": {"rings": 99}})"), "\"options.strip.rings\" must be an integer from 0 to 8");
   EXPECT_EQ(error(R"({"refine": 1})"), "\"options.refine\" must be true or false");
-  EXPECT_EQ(error(R"({"initial": "dijkstra"})"),
-            "\"options.initial\" must be one of marching, feature-path, geodesic, not \"dijkstra\"");
+  EXPECT_EQ(error(R"({"initial": {"method": "dijkstra"}})"),
+            "\"options.initial.method\" must be one of marching, feature-path, geodesic, not \"dijkstra\"");
   EXPECT_EQ(error(R"({"snake": {"alpah": 1}})"), "unknown option \"options.snake.alpah\"");
   EXPECT_EQ(error(R"({"snake": 3})"), "\"options.snake\" must be a JSON object");
-  EXPECT_EQ(error(R"({"weights": {"alpha": -1}})"), "\"options.weights.alpha\" must be a number from 0 to 1000");
+  EXPECT_EQ(error(R"({"initial": {"marching_alpha": -1}})"), "\"options.initial.marching_alpha\" must be a number from 0 to 1000");
+  EXPECT_EQ(error(R"({"initial": {"max_edges": 0}})"), "\"options.initial.max_edges\" must be an integer from 1 to 1000");
   EXPECT_EQ(error("[1]"), "\"options\" must be a JSON object");
   // A request that once grew the snake without bound (../shared/data/regressions/snake_runaway_ridge20.request.json)
   // is refused at once instead of growing the snake for 51 s.
   EXPECT_EQ(error(R"({"snake": {"kappa": 1000}})"), "\"options.snake.kappa\" must be a number from 0 to 1");
   // JSON Schema counts 2.0 as an integer, so do we; the value is stored as the integer.
   FeatureLineOptions o;
-  apply_options_json(json::parse(R"({"rings": 2.0, "initial": "feature_path"})"), o);
+  apply_options_json(json::parse(R"({"strip": {"rings": 2.0}, "initial": {"method": "feature_path"}})"), o);
   EXPECT_EQ(o.strip.rings, 2);
   EXPECT_EQ(o.initial.method, InitialMethod::feature_path);  // an accepted alias, never printed
   // Options built in code meet the same limits.
   o.snake.max_iterations = 100000;
   EXPECT_EQ(error_of([&] { check_options(feature_line_option_table(), o, "options"); }),
-            "\"options.snake.iterations\" must be an integer from 0 to 500");
+            "\"options.snake.max_iterations\" must be an integer from 0 to 500");
+}
+
+// ---- renamed options: old paths read for one release, never printed ------------------------------
+
+// Every row's name and old names as JSON paths, so a request can name the row by any of them.
+template <typename Options>
+std::size_t expect_old_names_read_like_new(const OptionTable<Options>& table) {
+  std::size_t old_names = 0;
+  for (const auto& field : table) {
+    for (const auto& old : field.spec.old_names) {
+      SCOPED_TRACE(old + " -> " + field.spec.name);
+      ++old_names;
+      json by_old = json::object(), by_new = json::object();
+      by_old[option_pointer(old)] = other_value(field.spec);
+      by_new[option_pointer(field.spec.name)] = other_value(field.spec);
+      Options read_old, read_new;
+      apply_options(table, by_old, "options", read_old);
+      apply_options(table, by_new, "options", read_new);
+      EXPECT_EQ(options_json(table, read_old), options_json(table, read_new));
+      EXPECT_NE(options_json(table, read_old), options_json(table, Options{}));
+      EXPECT_EQ(with_current_names(table, by_old, "options"), by_new);
+      // Both names in one request: refused, naming both (the old one first) and the one to keep.
+      // An old leaf that is now the new name's group ("initial") cannot meet it in one object.
+      if (field.spec.name.rfind(old + ".", 0) == 0) continue;
+      json both = by_new;
+      both[option_pointer(old)] = other_value(field.spec);
+      Options twice;
+      EXPECT_EQ(error_of([&] { apply_options(table, both, "options", twice); }),
+                "\"options." + old + "\" and \"options." + field.spec.name + "\" name the same option: give only \"options." +
+                    field.spec.name + "\"");
+    }
+  }
+  return old_names;
+}
+
+TEST(OptionTable, OldNamesReadLikeTheNewOnes) {
+  EXPECT_EQ(expect_old_names_read_like_new(feature_line_option_table()), 15u);
+  EXPECT_EQ(expect_old_names_read_like_new(segmentation_option_table()), 0u);
+  EXPECT_EQ(expect_old_names_read_like_new(curvature_option_table()), 0u);
+  EXPECT_EQ(expect_old_names_read_like_new(feature_seed_option_table()), 0u);
+}
+
+// The paths of every leaf of a JSON object, joined by '.'.
+void leaf_paths(const json& object, const std::string& prefix, std::vector<std::string>& out) {
+  for (auto it = object.begin(); it != object.end(); ++it) {
+    const std::string path = option_path(prefix, it.key());
+    if (it.value().is_object()) leaf_paths(it.value(), path, out);
+    else out.push_back(path);
+  }
+}
+
+template <typename Options>
+void expect_names_unambiguous_and_printed_new(const OptionTable<Options>& table) {
+  std::vector<std::string> names, printed;
+  for (const auto& field : table) {
+    names.push_back(field.spec.name);
+    names.insert(names.end(), field.spec.old_names.begin(), field.spec.old_names.end());
+  }
+  for (const auto& field : table) {
+    const std::string& name = field.spec.name;
+    EXPECT_EQ(std::count(names.begin(), names.end(), name), 1) << name << " names two rows";
+    // A current name is a leaf: no name, current or old, lies below it.
+    for (const auto& other : names) EXPECT_NE(other.rfind(name + ".", 0), 0u) << other << " lies below " << name;
+    for (const auto& old : field.spec.old_names) EXPECT_EQ(std::count(names.begin(), names.end(), old), 1) << old;
+  }
+  // Effective options: exactly the current names, each once.
+  leaf_paths(options_json(table, Options{}), "", printed);
+  std::vector<std::string> current;
+  for (const auto& field : table) current.push_back(field.spec.name);
+  std::sort(printed.begin(), printed.end());
+  std::sort(current.begin(), current.end());
+  EXPECT_EQ(printed, current);
+}
+
+TEST(OptionTable, NamesAreUnambiguousAndOnlyCurrentOnesArePrinted) {
+  expect_names_unambiguous_and_printed_new(feature_line_option_table());
+  expect_names_unambiguous_and_printed_new(segmentation_option_table());
+  expect_names_unambiguous_and_printed_new(curvature_option_table());
+  expect_names_unambiguous_and_printed_new(feature_seed_option_table());
+  const json printed = options_to_json(FeatureLineOptions{});
+  for (const char* old : {"weights", "rings", "curvature_term", "max_line_edges", "flattening"}) EXPECT_FALSE(printed.contains(old)) << old;
+  EXPECT_FALSE(printed["snake"].contains("iterations"));
+}
+
+TEST(OptionTable, InitialIsTheOldMethodAsAStringOrTheNewGroupAsAnObject) {
+  auto read = [](const char* text) {
+    FeatureLineOptions o;
+    apply_options_json(json::parse(text), o);
+    return o;
+  };
+  EXPECT_EQ(read(R"({"initial": "marching"})").initial.method, InitialMethod::marching);
+  const FeatureLineOptions object = read(R"({"initial": {"method": "marching", "marching_delta": 3, "max_edges": 500}})");
+  EXPECT_EQ(object.initial.method, InitialMethod::marching);
+  EXPECT_EQ(object.initial.marching_delta, 3);
+  EXPECT_EQ(object.initial.max_edges, 500);
+  // The old string beside other old and new names of the initial line's options.
+  const FeatureLineOptions mixed = read(R"({"initial": "geodesic", "weights": {"delta": 3}, "max_line_edges": 400,
+                                            "strip": {"rings": 4}, "snake": {"iterations": 50}})");
+  EXPECT_EQ(mixed.initial.method, InitialMethod::geodesic);
+  EXPECT_EQ(mixed.initial.marching_delta, 3);
+  EXPECT_EQ(mixed.initial.max_edges, 400);
+  EXPECT_EQ(mixed.strip.rings, 4);
+  EXPECT_EQ(mixed.snake.max_iterations, 50);
+  auto error = [](const char* text) {
+    return error_of([&] {
+      FeatureLineOptions o;
+      apply_options_json(json::parse(text), o);
+    });
+  };
+  // Errors name the path the request used, old or new.
+  EXPECT_EQ(error(R"({"initial": "dijkstra"})"), "\"options.initial\" must be one of marching, feature-path, geodesic, not \"dijkstra\"");
+  EXPECT_EQ(error(R"({"initial": 3})"), "\"options.initial\" must be one of marching, feature-path, geodesic");
+  EXPECT_EQ(error(R"({"initial": {"methd": "marching"}})"), "unknown option \"options.initial.methd\"");
+  EXPECT_EQ(error(R"({"rings": 99})"), "\"options.rings\" must be an integer from 0 to 8");
+  EXPECT_EQ(error(R"({"weights": {"alpha": -1}})"), "\"options.weights.alpha\" must be a number from 0 to 1000");
+  EXPECT_EQ(error(R"({"weights": {"epsilon": 1}})"), "unknown option \"options.weights.epsilon\"");
+  EXPECT_EQ(error(R"({"weights": 1})"), "\"options.weights\" must be a JSON object");
+  EXPECT_EQ(error(R"({"snake": {"iterations": 100000}})"), "\"options.snake.iterations\" must be an integer from 0 to 500");
+  EXPECT_EQ(error(R"({"initial": "marching", "curvature_term": "high-magnitude", "strip": {"flattening": 1}})"),
+            "\"options.strip.flattening\" must be one of automatic, conformal, similar-triangles");
+  // The old string and the new method cannot meet in one object (one key), but other pairs can.
+  EXPECT_EQ(error(R"({"initial": {"method": "marching", "marching_alpha": 2}, "weights": {"alpha": 3}})"),
+            "\"options.weights.alpha\" and \"options.initial.marching_alpha\" name the same option: give only "
+            "\"options.initial.marching_alpha\"");
+  EXPECT_EQ(error(R"({"snake": {"iterations": 10, "max_iterations": 20}})"),
+            "\"options.snake.iterations\" and \"options.snake.max_iterations\" name the same option: give only "
+            "\"options.snake.max_iterations\"");
+  EXPECT_EQ(error(R"({"strip": {"rings": 3}, "rings": 3})"),
+            "\"options.rings\" and \"options.strip.rings\" name the same option: give only \"options.strip.rings\"");
 }
 
 TEST(EnumNames, OneTableGivesNamesParsingAndChoices) {
@@ -132,7 +266,7 @@ TEST(OptionTable, DescriptionUsesJsonSchemaWords) {
   const json described = describe_api_options();
   json iterations, mode;
   for (const auto& row : described["feature_line"])
-    if (row["name"] == "snake.iterations") iterations = row;
+    if (row["name"] == "snake.max_iterations") iterations = row;
   for (const auto& row : described["segmentation"])
     if (row["name"] == "mode") mode = row;
   EXPECT_EQ(iterations["type"], "integer");
@@ -140,6 +274,8 @@ TEST(OptionTable, DescriptionUsesJsonSchemaWords) {
   EXPECT_EQ(iterations["maximum"], 500);
   EXPECT_EQ(iterations["default"], 300);
   EXPECT_EQ(iterations["cli_flag"], "--iterations");
+  EXPECT_EQ(iterations["old_names"], json({"snake.iterations"}));
+  EXPECT_FALSE(mode.contains("old_names"));
   EXPECT_FALSE(iterations["description"].get<std::string>().empty());
   EXPECT_EQ(mode["type"], "string");
   EXPECT_EQ(mode["enum"], json({"snap", "remesh"}));
@@ -187,6 +323,8 @@ TEST(Requests, LineRequestsNameTheFieldInErrors) {
     return error_of([&] { parse_feature_line_body(json::parse(text), *mesh, batch); });
   };
   EXPECT_EQ(error(R"({"keys": [1, 2], "colour": "red"})"), "unknown field \"request.colour\"");
+  EXPECT_EQ(error(R"({"lines": [{"keys": [1, 2], "options": {"strip": {"rings": 9}}}]})"),
+            "\"options.strip.rings\" must be an integer from 0 to 8");
   EXPECT_EQ(error(R"({"lines": [{"keys": [1, 2], "options": {"rings": 9}}]})"), "\"options.rings\" must be an integer from 0 to 8");
   EXPECT_EQ(error(R"({"keys": [1, 100000]})"), "request.keys[1] is vertex 100000, but the mesh has only " +
                                                     std::to_string(mesh->n_vertices()) + " vertices");
@@ -233,9 +371,9 @@ TEST(OptionTable, LimitsAreTheEnginesRanges) {
   EXPECT_EQ(expect_limits_inside_engine_ranges(segmentation_option_table()), 3u);
   EXPECT_EQ(expect_limits_inside_engine_ranges(curvature_option_table()), 4u);
   const auto line = option_specs(feature_line_option_table());
-  EXPECT_EQ(spec_named(line, "rings").maximum, StripOptions::max_rings);
+  EXPECT_EQ(spec_named(line, "strip.rings").maximum, StripOptions::max_rings);
   EXPECT_EQ(spec_named(line, "min_piece_edges").minimum, FeatureLineOptions::min_piece_edges_range.min);
-  EXPECT_EQ(spec_named(line, "snake.iterations").minimum, SnakeOptions::max_iterations_range.min);
+  EXPECT_EQ(spec_named(line, "snake.max_iterations").minimum, SnakeOptions::max_iterations_range.min);
   EXPECT_EQ(spec_named(option_specs(curvature_option_table()), "radius").maximum, CurvatureLimits::max_radius);
   // A row cannot take an open or unbounded engine end, nor leave the engine's range.
   EXPECT_THROW(within(above(0)), std::logic_error);
@@ -316,8 +454,8 @@ TEST(OptionTable, LinesAndPreparationRunAtEveryTableLimit) {
   const auto mesh = prepare_mesh(field.mesh);
   const auto keys = testing::keys_on_crest(field, {-0.8, 0.0, 0.8});
   for (const auto& [what, options] : options_at_table_limits(feature_line_option_table())) {
-    // At its minimum of one edge max_line_edges refuses any longer line: that is its job.
-    if (what == "max_line_edges = 1") continue;
+    // At its minimum of one edge initial.max_edges refuses any longer line: that is its job.
+    if (what == "initial.max_edges = 1") continue;
     FeatureLineRequest request;
     request.keys = keys;
     request.options = options;

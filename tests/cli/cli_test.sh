@@ -78,6 +78,19 @@ check "the pointer names the command's help" [ "$(tail -n 1 "$tmp/err")" = "Run 
 check "misspelt JSON option exits 1" [ $rc = 1 ]
 check "misspelt JSON option named" [ "$(cat "$tmp/err")" = 'featureline: unknown option "options.snake.alpah"' ]
 
+# --options may use an option's old name (before names became member paths); a flag still wins over it.
+"$FEATURELINE" detect "$mesh" --keys 10,200 --rings 2 >"$tmp/rings_flag.json" 2>"$tmp/err"; rc=$?
+check "--rings exits 0" [ $rc = 0 ]
+"$FEATURELINE" detect "$mesh" --keys 10,200 --options '{"rings": 5}' --rings 2 >"$tmp/rings_both.json" 2>"$tmp/err"; rc=$?
+check "--rings over an old-named JSON rings exits 0" [ $rc = 0 ]
+check "... and the flag wins" [ "$(jq .stats.strip_faces "$tmp/rings_both.json")" = "$(jq .stats.strip_faces "$tmp/rings_flag.json")" ]
+"$FEATURELINE" detect "$mesh" --keys 10,200 --options '{"initial": "marching", "weights": {"delta": 1}}' --weights 1,1,1,3 >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "--weights over the old initial string and weights exits 0" [ $rc = 0 ]
+check "... keeping the method" [ "$(jq -r '.initial.method' "$tmp/out")" = marching ]
+"$FEATURELINE" detect "$mesh" --keys 10,200 --options '{"rings": 3, "strip": {"rings": 4}}' >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "an option by its old and new name exits 1" [ $rc = 1 ]
+check "... naming both" [ "$(cat "$tmp/err")" = 'featureline: "options.rings" and "options.strip.rings" name the same option: give only "options.strip.rings"' ]
+
 "$FEATURELINE" detect "$mesh" --keys 1,x >"$tmp/out" 2>"$tmp/err"; rc=$?
 check "malformed keys exit 1" [ $rc = 1 ]
 sample="$(dirname "$0")/../../samples/ridge_field.off"

@@ -197,3 +197,6 @@ write('json', 'initial_marching.json', '{"initial": "marching", "weights": [1, 1
 write('json', 'snake.json', '{"rings": 3, "refine": true, "snake": {"alpha": 0.5, "beta": 0.5, "tau": 0.1, "kappa": 1, "iterations": 200, "spacing": 1, "force": "smooth", "tolerance": 0.001}}');
 write('json', 'wrong_type.json', '{"rings": "three", "snake": []}');
 write('json', 'regression_expensive_snake.json', '{"snake": {"iterations": 100000, "tolerance": 0, "spacing": 0.05}}');
+// The same options by their member paths, and one option by its old and new names (refused).
+write('json', 'member_paths.json', '{"initial": {"method": "marching", "marching_delta": 3, "max_edges": 500}, "strip": {"rings": 3, "flattening": "conformal"}, "snake": {"max_iterations": 200}}');
+write('json', 'old_and_new_name.json', '{"rings": 3, "strip": {"rings": 4}}');

@@ -205,6 +205,14 @@ expect "batch of 2 lines" 200 - POST "$FL" "$T/l3.json"
 check_eq "batch answers 2 lines in order" "$(jq -c '[.lines[].keys]' "$T/l3.json")" "[[10,200],[200,400]]"
 check_eq "refine false honoured in the batch" "$(jq -c '[.lines[].stats.refined]' "$T/l3.json")" "[true,false]"
 
+# Options by their old names (before they became member paths), still accepted, answer as the new names do.
+echo '{"lines": [{"keys": [10, 200], "options": {"initial": "geodesic", "rings": 3, "snake": {"iterations": 40}}},
+  {"keys": [10, 200], "options": {"initial": {"method": "geodesic"}, "strip": {"rings": 3}, "snake": {"max_iterations": 40}}}]}' >"$T/r3o.json"
+validate_request "a request by old and new option names matches the contract" POST "$FL" "$T/r3o.json"
+lines "$T/l3o.json" "$T/r3o.json"
+expect "a line by old option names and one by the new" 200 - POST "$FL" "$T/l3o.json"
+check_eq "old and new names give the same line" "$(jq -c '[.lines[] | [.initial.method, .refined.length]] | unique | length' "$T/l3o.json")" 1
+
 echo '{"keys": [10, 200, 400], "closed": true}' >"$T/r4.json"
 validate_request "closed request matches the contract" POST "$FL" "$T/r4.json"
 lines "$T/l4.json" "$T/r4.json"
@@ -400,6 +408,10 @@ check "key out of range: message names the vertex" grep -q 6475 "$T/e2.json"
 post_json "$T/e3.json" '{"keys": [10, 20], "options": {"snake": {"alpah": 1}}}'
 expect "unknown option field" 400 invalid_request POST "$FL" "$T/e3.json"
 check "unknown option field: message names it" grep -q alpah "$T/e3.json"
+post_json "$T/e3o.json" '{"keys": [10, 20], "options": {"rings": 3, "strip": {"rings": 3}}}'
+expect "an option by its old and its new name" 400 invalid_request POST "$FL" "$T/e3o.json"
+check_eq "... naming both" "$(jq -r .error.message "$T/e3o.json")" \
+  '"options.rings" and "options.strip.rings" name the same option: give only "options.strip.rings"'
 post_json "$T/e3b.json" '{"keys": [10, 20], "colour": "red"}'
 expect "unknown top-level field" 400 invalid_request POST "$FL" "$T/e3b.json"
 post_json "$T/e4.json" '{"keys": 10}'
@@ -520,8 +532,8 @@ http "$T/dl-up.json" -H 'Content-Type: application/octet-stream' --data-binary @
 expect "upload the sample to the deadline server" 201 - POST /v1/meshes "$T/dl-up.json"
 DI=$(jq -r .mesh_id "$T/dl-up.json")
 jq -n '[range(1; 40; 3)] | to_entries | map((.value * 41) as $row | if .key % 2 == 0 then [$row + 1, $row + 39] else [$row + 39, $row + 1] end) | add
-  | {lines: [range(64) as $i | {keys: ., options: {rings: 8, min_piece_edges: 2, max_edge_distortion: 100,
-     snake: {iterations: 500, tolerance: 0, spacing: 0.25, kappa: 1, exponent: 4, max_step: 1, resample_every: 1}}}]}' >"$T/dl-slow.json"
+  | {lines: [range(64) as $i | {keys: ., options: {strip: {rings: 8, max_edge_distortion: 100}, min_piece_edges: 2,
+     snake: {max_iterations: 500, tolerance: 0, spacing: 0.25, kappa: 1, exponent: 4, max_step: 1, resample_every: 1}}}]}' >"$T/dl-slow.json"
 http "$T/dl-slow.out" -H 'Content-Type: application/json' --data-binary @"$T/dl-slow.json" "$D/v1/meshes/$DI/feature-lines"
 expect "64 lines at the option caps against a deadline of $FACTOR s" 503 deadline_exceeded POST "/v1/meshes/$DI/feature-lines" "$T/dl-slow.out"
 echo '{"keys": [701, 963, 1184]}' >"$T/dl-fast.json"

@@ -154,8 +154,15 @@ mutate "$FIX/line_request.json" "$WORK/r2t.json" 'd.keys = [701, 963]; delete d.
 expect 1 "two keys with trace fail" --grep '/keys' -- node "$VR" --request POST "$FL" "$WORK/r2t.json"
 mutate "$FIX/line_request.json" "$WORK/r2.json" 'd.options.snake.iterationz = 5;'
 expect 1 "unknown snake option fails" --grep 'unexpected property "iterationz"' -- node "$VR" --request POST "$FL" "$WORK/r2.json"
-mutate "$FIX/line_request.json" "$WORK/r3.json" 'd.options.rings = 9;'
-expect 1 "rings out of range fails" --grep '/options/rings' -- node "$VR" --request POST "$FL" "$WORK/r3.json"
+mutate "$FIX/line_request.json" "$WORK/r3.json" 'd.options.strip.rings = 9;'
+expect 1 "strip.rings out of range fails" --grep '/options/strip/rings' -- node "$VR" --request POST "$FL" "$WORK/r3.json"
+# Old option names (before they became member paths) are accepted until the next release.
+mutate "$FIX/line_request.json" "$WORK/r3o.json" 'd.options = {initial: "marching", weights: {alpha: 1, delta: 0.25}, curvature_term: "similar-to-end", max_line_edges: 500, rings: 3, flattening: "conformal", snake: {iterations: 100}};'
+expect 0 "request with the old option names is valid" -- node "$VR" --request POST "$FL" "$WORK/r3o.json"
+mutate "$FIX/line_request.json" "$WORK/r3r.json" 'd.options = {rings: 9};'
+expect 1 "old rings out of range fails" --grep '/options/rings' -- node "$VR" --request POST "$FL" "$WORK/r3r.json"
+mutate "$FIX/line_request.json" "$WORK/r3i.json" 'd.options.initial = 5;'
+expect 1 "initial neither an object nor a method fails" --grep '/options/initial' -- node "$VR" --request POST "$FL" "$WORK/r3i.json"
 mutate "$FIX/line_request.json" "$WORK/r8.json" 'd.options.keep_initial_below = 1.5;'
 expect 1 "keep_initial_below out of range fails" --grep '/options/keep_initial_below' -- node "$VR" --request POST "$FL" "$WORK/r8.json"
 mutate "$FIX/line_request.json" "$WORK/r4.json" 'd.keys[1] = {point: [0, 0]};'

@@ -88,12 +88,21 @@ TEST(InProcessServer, ABadOptionIs400WithTheExactMessage) {
   RunningServer server({});
   auto client = server.client();
   const std::string lines = "/v1/meshes/" + server.mesh_id() + "/feature-lines";
-  auto r = client.Post(lines.c_str(), R"({"keys": [701, 963], "options": {"snake": {"iterations": 100000}}})",
+  auto r = client.Post(lines.c_str(), R"({"keys": [701, 963], "options": {"snake": {"max_iterations": 100000}}})",
                        "application/json");
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 400);
   EXPECT_EQ(error_of(r)["code"], "invalid_request");
+  EXPECT_EQ(error_of(r)["message"], "\"options.snake.max_iterations\" must be an integer from 0 to 500");
+  // An old name (accepted for one release) is named as the request wrote it; with its new name, 400.
+  r = client.Post(lines.c_str(), R"({"keys": [701, 963], "options": {"snake": {"iterations": 100000}}})", "application/json");
+  ASSERT_TRUE(r);
   EXPECT_EQ(error_of(r)["message"], "\"options.snake.iterations\" must be an integer from 0 to 500");
+  r = client.Post(lines.c_str(), R"({"keys": [701, 963], "options": {"rings": 3, "strip": {"rings": 3}}})", "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400);
+  EXPECT_EQ(error_of(r)["message"],
+            "\"options.rings\" and \"options.strip.rings\" name the same option: give only \"options.strip.rings\"");
   r = client.Post(lines.c_str(), R"({"keys": [701, 963], "options": {"snake": {"iteratoins": 5}}})", "application/json");
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 400);

@@ -159,7 +159,7 @@ async function run() {
     alpha: ['min', 'max', 'step'].map((a) => document.getElementById('opt-s-alpha').getAttribute(a)),
     forces: [...document.getElementById('opt-s-force').options].map((o) => o.value),
   }));
-  check(JSON.stringify(inputs.iterations) === JSON.stringify([String(row('snake.iterations').minimum), String(row('snake.iterations').maximum), '1']),
+  check(JSON.stringify(inputs.iterations) === JSON.stringify([String(row('snake.max_iterations').minimum), String(row('snake.max_iterations').maximum), '1']),
     'the iterations input takes its limits from /v1/options', JSON.stringify(inputs.iterations));
   check(inputs.alpha[1] === String(row('snake.alpha').maximum) && inputs.alpha[2] === 'any', 'a number input gets step "any"', JSON.stringify(inputs.alpha));
   check(JSON.stringify(inputs.forces) === JSON.stringify(['', ...row('snake.force').enum]), 'a choice lists the table\'s names', JSON.stringify(inputs.forces));
@@ -169,7 +169,7 @@ async function run() {
   await until('the options to be applied', async () => (await state()).requestCount > n0);
   await idle();
   s = await state();
-  check(JSON.stringify(await page.evaluate(() => window.featureline.options)) === '{"snake":{"iterations":5}}', 'the options panel maps to "options"');
+  check(JSON.stringify(await page.evaluate(() => window.featureline.options)) === '{"snake":{"max_iterations":5}}', 'the options panel maps to "options"');
   // stats.iterations adds up the snake's iterations over the line's pieces.
   check(s.lastResult.stats.iterations <= 5 * s.lastResult.stats.pieces && s.lastResult.stats.iterations < defaultIterations,
     `snake iterations follow the options panel (${s.lastResult.stats.iterations} over ${s.lastResult.stats.pieces} piece(s))`);

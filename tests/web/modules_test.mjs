@@ -81,12 +81,12 @@ test('a session round-trips and a wrong one is refused with the reason', () => {
   const doc = sessionDocument({
     mesh: { name: 'm.off', id: 'abc', vertexCount: 10, faceCount: 16, description: { format: 'off' } },
     lines: [{ name: 'Line 1', keys: [1, 2, 3], closed: true }],
-    options: { snake: { iterations: 5 } },
+    options: { snake: { max_iterations: 5 } },
     upAxis: 'z',
   });
   const back = parseSession(JSON.stringify(doc));
   assert.deepEqual(back.lines, [{ name: 'Line 1', keys: [1, 2, 3], closed: true }]);
-  assert.deepEqual(back.options, { snake: { iterations: 5 } });
+  assert.deepEqual(back.options, { snake: { max_iterations: 5 } });
   assert.equal(back.up_axis, 'z');
   assert.throws(() => parseSession('{'), /not JSON/);
   assert.throws(() => parseSession('{"format": "other"}'), /not a Featureline session/);

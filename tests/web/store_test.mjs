@@ -235,7 +235,7 @@ test('undo and redo restore keys and take cached answers without asking the serv
   assert.equal(state.lines.length, 2);
   actions.undo();
   assert.equal(state.lines.length, 1);
-  actions.setOptions({ snake: { iterations: 5 } });
+  actions.setOptions({ snake: { max_iterations: 5 } });
   assert.equal(store.history.undoLabel, 'change options');
   actions.undo();
   assert.deepEqual(state.options, {});

@@ -405,6 +405,23 @@ await h.run(async () => {
   check(JSON.stringify(s2.lines.map((l) => ({ keys: l.keys, length: l.length }))) === JSON.stringify(original),
     'a downloaded lines file loads back and re-creates the lines', () => JSON.stringify(s2.lines));
 
+  // A session saved before options were renamed to their member paths fills the renamed inputs.
+  const oldSessionPath = path.join(h.tmp, 'old_session.json');
+  fs.writeFileSync(oldSessionPath, JSON.stringify({ ...session, options: { initial: 'marching', rings: 3, snake: { iterations: 40 } } }));
+  const page3 = await h.context.newPage();
+  h.watch(page3);
+  const a3 = api(page3);
+  await page3.goto(`${base}/?trace=0`);
+  await until('the third page to start', () => page3.evaluate(() => !!window.featureline && window.featureline.samples.length > 0));
+  await until('the option tables to reach its form', async () => (await page3.getAttribute('#opt-s-iterations', 'max')) !== null, 5000);
+  await page3.setInputFiles('#session-input', oldSessionPath);
+  await until('the old session to load', async () => (await a3.state()).lines.length === original.length);
+  await settled(a3);
+  const oldForm = await Promise.all(['#opt-initial', '#opt-rings', '#opt-s-iterations'].map((id) => page3.inputValue(id)));
+  check(JSON.stringify(oldForm) === '["marching","3","40"]', 'a session with options under their old names fills the renamed inputs',
+    () => JSON.stringify(oldForm));
+  await page3.close();
+
   // ---- the server forgets the mesh: the page uploads its file again and re-creates the lines -----
   const gone = await fetch(`${base}/v1/meshes/${session.mesh.id}`, { method: 'DELETE' });
   check(gone.status === 204, 'the mesh is deleted through the API');
@@ -523,7 +540,7 @@ await h.run(async () => {
 
   // ---- options are edits too: undo restores the form ---------------------------------------------
   await page.fill('#opt-s-iterations', '7');
-  await until('the option to apply', async () => JSON.stringify(await page.evaluate(() => window.featureline.options)) === '{"snake":{"iterations":7}}', 5000);
+  await until('the option to apply', async () => JSON.stringify(await page.evaluate(() => window.featureline.options)) === '{"snake":{"max_iterations":7}}', 5000);
   await page.locator('#panel h1').click(); // out of the field: Ctrl+Z is then the page's undo
   await page.keyboard.press('Control+z');
   const undone = { value: await page.inputValue('#opt-s-iterations'), options: await page.evaluate(() => window.featureline.options) };

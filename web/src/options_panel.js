@@ -35,6 +35,7 @@ export function readOptions() {
 // accepts. Until they arrive the server's own checks answer.
 export function applyOptionTables(tables) {
   const rows = new Map(tables.feature_line.map((row) => [row.name, row]));
+  oldNames = new Map(tables.feature_line.map((row) => [row.name, row.old_names ?? []]));
   for (const el of $('options-form').elements) {
     const row = rows.get(el.name);
     if (!row) continue;
@@ -54,12 +55,25 @@ export function applyOptionTables(tables) {
   }
 }
 
+// A row's paths before it was renamed, from the option tables: a session saved with an old
+// name ("rings") still fills its input ("strip.rings"); the next edit saves the new name.
+let oldNames = new Map();
+
+function valueAt(options, path) {
+  let v = options;
+  for (const p of path.split('.')) v = v?.[p];
+  return v;
+}
+
 // The form shows `options` (undo, redo, a loaded session).
 export function writeOptionsForm(options) {
   for (const el of $('options-form').elements) {
     if (!el.name) continue;
-    let v = options;
-    for (const p of el.name.split('.')) v = v?.[p];
+    let v = valueAt(options, el.name);
+    for (const old of oldNames.get(el.name) ?? []) {
+      const before = valueAt(options, old);  // "initial" held the method's name, now the group
+      if (v == null && typeof before !== 'object') v = before;
+    }
     el.value = v === undefined || v === null ? '' : String(v);
   }
 }
