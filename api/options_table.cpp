@@ -34,6 +34,9 @@ std::string quoted_excerpt(const std::string& text) {
 
 }  // namespace
 
+// "95%" for a dropped share of 0.05: what the automatic strip layout keeps.
+std::string kept_percent(double dropped_share) { return format_number(100 * (1 - dropped_share)) + "%"; }
+
 std::string option_path(const std::string& prefix, const std::string& name) {
   if (prefix.empty()) return name;
   return name.empty() ? prefix : prefix + "." + name;
@@ -168,9 +171,10 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
       formerly({"dense_line_edges"}, option<O>("strip.dense_line_edges", {1, 1000}, "Automatic rings: lines of this "
                 "many edges get 3 rings, twice as many 4, four times 6, eight times 8", "", &O::strip,
                 &StripOptions::dense_line_edges)),
-      formerly({"flattening"}, option<O>("strip.flattening", {}, "How the strip is laid out in the plane: the paper's "
-                "similar triangles, a conformal map, or the paper's where it keeps 95% of the strip (97% on noisy "
-                "meshes)", "--flattening", &O::strip, &StripOptions::flattening)),
+      formerly({"flattening"}, option<O>("strip.flattening", {}, ("How the strip is laid out in the plane: the "
+                "paper's similar triangles, a conformal map, or the paper's where it keeps " +
+                kept_percent(StripOptions::max_dropped_share) + " of the strip (" +
+                kept_percent(StripOptions::max_dropped_share_noisy) + " on noisy meshes)").c_str(), "--flattening", &O::strip, &StripOptions::flattening)),
       formerly({"max_edge_distortion"}, option<O>("strip.max_edge_distortion", {0.01, 100}, "Flattened triangles whose "
                 "edges stretch by more than this fraction are left out of the snake's domain", "", &O::strip,
                 &StripOptions::max_edge_distortion)),
