@@ -198,7 +198,6 @@ InitialLineResult find_initial_line(const PreparedMesh& mesh, const std::vector<
                                     const InitialLineOptions& options, const Cancellation* cancel) {
   throw_if_cancelled(cancel);
   if (keys.size() < 2) throw InvalidInputError("a feature line needs at least two keys");
-  if (closed && keys.size() < 2) throw InvalidInputError("a closed feature line needs at least two keys");
   for (std::size_t i = 0; i < keys.size(); ++i) {
     if (keys[i] >= mesh.n_vertices())
       throw InvalidInputError("key " + std::to_string(i) + " is vertex " + std::to_string(keys[i]) +
