@@ -48,7 +48,8 @@ double median(std::vector<double> v) {
 
 // Medians of the preparation stages over `runs` preparations of `raw`.
 struct PrepareBreakdown {
-  std::vector<double> total, triangles, adjacency, tables, index, normals, curvature, mean, creases, noise, jet, smoothing;
+  std::vector<double> total, triangles, adjacency, tables, index, normals, curvature, mean, creases, noise, jet, smoothing,
+      landmarks;
 };
 
 void add_timings(const PreparedMesh& mesh, PrepareBreakdown& b) {
@@ -66,13 +67,14 @@ void add_timings(const PreparedMesh& mesh, PrepareBreakdown& b) {
   b.noise.push_back(c.noise_ms);
   b.jet.push_back(c.jet_ms);
   b.smoothing.push_back(c.smoothing_ms);
+  b.landmarks.push_back(t.landmarks_ms);
 }
 
 void print_breakdown(const std::string& name, const PrepareBreakdown& b) {
-  std::printf("%-20s %8.1f | %7.1f %7.1f %7.1f %7.1f %7.1f | %7.1f: %6.1f %7.1f %6.1f %7.1f %7.1f\n", name.c_str(),
-              median(b.total), median(b.triangles), median(b.adjacency), median(b.tables), median(b.index),
+  std::printf("%-20s %8.1f | %7.1f %7.1f %7.1f %7.1f %7.1f | %7.1f: %6.1f %7.1f %6.1f %7.1f %7.1f | %9.1f\n",
+              name.c_str(), median(b.total), median(b.triangles), median(b.adjacency), median(b.tables), median(b.index),
               median(b.normals), median(b.curvature), median(b.mean), median(b.creases), median(b.noise), median(b.jet),
-              median(b.smoothing));
+              median(b.smoothing), median(b.landmarks));
 }
 
 void dump_curvature(const PreparedMesh& mesh, const std::string& path) {
@@ -218,8 +220,8 @@ int main(int argc, char** argv) {
   std::printf("\nPreparation, ms (medians of %d preparations per mesh; curvature = mean + creases + noise + jet + "
               "smoothing):\n\n",
               prepare_runs);
-  std::printf("%-20s %8s | %7s %7s %7s %7s %7s | %7s: %6s %7s %6s %7s %7s\n", "mesh", "prepare", "triangl", "adjacen",
-              "tables", "index", "normals", "curvatu", "mean", "creases", "noise", "jet", "smooth");
+  std::printf("%-20s %8s | %7s %7s %7s %7s %7s | %7s: %6s %7s %6s %7s %7s | %9s\n", "mesh", "prepare", "triangl",
+              "adjacen", "tables", "index", "normals", "curvatu", "mean", "creases", "noise", "jet", "smooth", "landmarks");
   for (const auto& [name, breakdown] : breakdowns) print_breakdown(name, breakdown);
   return status;
 }

@@ -180,15 +180,18 @@ std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh&
                                                              double feature_sign,
                                                              const std::vector<std::uint32_t>* blocked,
                                                              const Cancellation* cancel, double max_cost) {
-  // The cheapest possible cost per unit length (the floor) is the bound that keeps the search
-  // between the two keys.
+  // Bounds that keep the search between the two keys: the cheapest possible cost per unit
+  // length (the floor), and the landmarks' costs, which every feature path's edge costs at least
+  // (at a floor below theirs, the share the lower floor can take off: cost(f) / cost(f0) is
+  // smallest, f / f0, on an edge of full strength).
   std::vector<std::uint32_t> path;
   if (feature_weighted) {
     FeaturePathCost cost(mesh, options, feature_sign);
-    path = cheapest_path_between(mesh, from, to, cost, blocked, cost.floor(), max_cost, cancel);
+    const CostBounds bounds{cost.floor(), std::min(1.0, cost.floor() / PathLandmarks::kFloor)};
+    path = cheapest_path_between(mesh, from, to, cost, blocked, bounds, max_cost, cancel);
   } else {
     const auto length = [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths()[k]; };
-    path = cheapest_path_between(mesh, from, to, length, blocked, 1.0, max_cost, cancel);
+    path = cheapest_path_between(mesh, from, to, length, blocked, CostBounds{1.0, 1.0}, max_cost, cancel);
   }
   if (path.empty()) return std::nullopt;
   return path;

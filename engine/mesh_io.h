@@ -61,10 +61,10 @@ struct ReadMeshOptions {
 /// What a prepared mesh keeps (PreparedMesh::memory_bytes), at least: per triangle its corners,
 /// input index, the faces across its edges, its entries in the faces around its vertices, and
 /// at least three adjacency entries with their edge lengths (76 B by prepared_mesh.cpp's count);
-/// per vertex its position, normal, curvature, row offsets, component and reported face (88 B).
-/// Both rounded down.
+/// per vertex its position, normal, curvature, row offsets, component, reported face and path
+/// landmark distances (104 B). Both rounded down.
 constexpr std::size_t kPreparedBytesPerTriangle = 72;
-constexpr std::size_t kPreparedBytesPerVertex = 84;
+constexpr std::size_t kPreparedBytesPerVertex = 100;
 /// What preparing it holds at its peak, at least: the tables above plus the OpenMesh kernel they
 /// are built from (per triangle 3 halfedges, 1.5 edges and the face, 62 B; per vertex its point,
 /// halfedge and status, 32 B), released once the tables are built. Budgets are checked against

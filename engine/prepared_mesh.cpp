@@ -399,7 +399,7 @@ std::size_t PreparedMesh::memory_bytes() const {
   bytes += t_.neighbor_edge_lengths.capacity() * sizeof(double) + t_.component.capacity() * sizeof(std::int32_t);
   bytes += (t_.vertex_faces.offsets.capacity() + t_.vertex_faces.faces.capacity()) * sizeof(std::uint32_t);
   bytes += t_.face_neighbors.capacity() * 3 * sizeof(std::uint32_t) + t_.boundary_vertex.capacity();
-  bytes += t_.vertex_index.memory_bytes();
+  bytes += t_.vertex_index.memory_bytes() + t_.landmarks.memory_bytes();
   for (const auto& w : t_.warnings) bytes += w.capacity();
   return bytes;
 }
@@ -480,8 +480,12 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   stats.crease_edges = pm.curvature.crease_edges;
   measure_curvature(pm);
 
-  pm.prepare_ms = ms_since(start);
-  return std::make_shared<const PreparedMesh>(std::move(pm));
+  auto prepared = std::make_shared<PreparedMesh>(std::move(pm));
+  PreparedTables& kept = prepared->t_;
+  kept.landmarks = build_path_landmarks(*prepared, executor, cancel);
+  kept.timings.landmarks_ms = lap_ms(clock);
+  kept.prepare_ms = ms_since(start);
+  return prepared;
 }
 
 double PreparedMesh::local_edge_length(std::uint32_t v) const {

@@ -15,6 +15,7 @@
 
 #include "engine/curvature.h"
 #include "engine/mesh_io.h"
+#include "engine/path_landmarks.h"
 #include "engine/vertex_index.h"
 
 namespace featureline {
@@ -80,6 +81,7 @@ struct PrepareTimings {
   double index_ms = 0;      ///< the k-d tree of vertices (beside normals and curvature)
   double normals_ms = 0;    ///< vertex normals
   double curvature_ms = 0;  ///< compute_curvature_field, all of it
+  double landmarks_ms = 0;  ///< build_path_landmarks
 };
 
 /// Faces around each vertex in compressed rows: the faces of v, in increasing id order, are
@@ -146,6 +148,8 @@ struct PreparedTables {
   /// never zero). Engine stages
   /// measure curvature in units of this, so options do not depend on the mesh's scale.
   double curvature_scale = 1;
+  /// Lower bounds of feature-path costs for the path searches (engine/path_landmarks.h).
+  PathLandmarks landmarks;
   MeshStatistics statistics;
   std::vector<std::string> warnings;
   double prepare_ms = 0;
@@ -174,6 +178,7 @@ class PreparedMesh {
   const std::vector<char>& boundary_vertex() const { return t_.boundary_vertex; }
   const VertexIndex& vertex_index() const { return t_.vertex_index; }
   double curvature_scale() const { return t_.curvature_scale; }
+  const PathLandmarks& landmarks() const { return t_.landmarks; }
   const MeshStatistics& statistics() const { return t_.statistics; }
   const std::vector<std::string>& warnings() const { return t_.warnings; }
   double prepare_ms() const { return t_.prepare_ms; }
@@ -227,6 +232,8 @@ class PreparedMesh {
   std::size_t memory_bytes() const;
 
  private:
+  // The landmarks are measured over the finished tables, through the queries above.
+  friend std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh, const PrepareOptions&, const Cancellation*);
   PreparedTables t_;
 };
 

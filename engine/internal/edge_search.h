@@ -132,28 +132,66 @@ std::vector<std::uint32_t> cheapest_edge_path(const PreparedMesh& mesh, std::uin
   return path;
 }
 
+/// What a search between two vertices may assume of every edge's cost, for its lower bounds.
+struct CostBounds {
+  double slope = 0;  ///< no edge costs less than `slope` times its length
+  /// No edge costs less than `landmarks` times its cost in the prepared mesh's landmarks
+  /// (engine/path_landmarks.h: a feature path's cost at their floor, either sign); 0: the
+  /// landmarks are not used.
+  double landmarks = 0;
+};
+
+/// The average potential p(v) = (h(v, to) - h(v, from)) / 2 of a search from both ends (Ikeda
+/// et al. 1994), where h(v, e) is the larger of two consistent lower bounds of the cost from v
+/// to e: the straight-line one (slope |v - e|) and the landmarks' (Goldberg & Harrelson 2005).
+class AveragePotential {
+ public:
+  AveragePotential(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to, const CostBounds& bounds)
+      : mesh_(mesh), landmarks_(mesh.landmarks()), bounds_(bounds), from_(from), to_(to),
+        use_landmarks_(bounds.landmarks > 0 && !landmarks_.empty()) {
+    if (use_landmarks_) at_from_ = landmarks_.at(from), at_to_ = landmarks_.at(to);
+  }
+  double operator()(std::uint32_t v) const {
+    const auto& P = mesh_.positions();
+    double to_end = bounds_.slope * (P[to_] - P[v]).norm(), to_start = bounds_.slope * (P[from_] - P[v]).norm();
+    if (use_landmarks_) {
+      const auto& at_v = landmarks_.at(v);
+      to_end = std::max(to_end, bounds_.landmarks * landmarks_.lower_bound(at_v, at_to_));
+      to_start = std::max(to_start, bounds_.landmarks * landmarks_.lower_bound(at_v, at_from_));
+    }
+    return 0.5 * (to_end - to_start);
+  }
+
+ private:
+  const PreparedMesh& mesh_;
+  const PathLandmarks& landmarks_;
+  CostBounds bounds_;
+  std::uint32_t from_, to_;
+  bool use_landmarks_;
+  PathLandmarks::Distances at_from_{}, at_to_{};
+};
+
 /// The cheapest path over mesh edges between `from` and `to`, both included; empty when none
 /// costs at most `max_cost`. A* from both ends at once with the average potential
-/// p(v) = slope (|v - to| - |v - from|) / 2 (Ikeda et al. 1994): forward keys g_f + p, backward
-/// keys g_b - p, both consistent, so the search stops once the two smallest keys sum to the best
-/// path found. Where no feature guides it a one-sided search floods a disc as wide as the segment
-/// is long; the two halves flood two discs half as wide.
+/// (AveragePotential): forward keys g_f + p, backward keys g_b - p, both consistent, so the
+/// search stops once the two smallest keys sum to the best path found. Where no feature guides
+/// it and only the straight-line bound is given, a one-sided search floods a disc as wide as the
+/// segment is long and the two halves two discs half as wide; the landmarks' bound keeps both
+/// near the path.
 ///  - `edge_cost(v, k)`: cost of the edge between v and mesh.neighbors()[k], the same both ways;
 ///    negative to skip it;
 ///  - `blocked`: vertices no path may pass through (its two ends always may), or nullptr; they
 ///    are marked settled on both sides before the search, so they cost nothing per edge;
-///  - `slope`: no edge costs less than `slope` times its length.
+///  - `bounds`: what every edge's cost is at least (CostBounds).
 /// Settles vertices in (key, id) order on the side with the smaller key, so ties resolve the same
 /// way on every run. Checks `cancel` every 4096 settled vertices.
 template <class EdgeCost>
 std::vector<std::uint32_t> cheapest_path_between(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
-                                                 EdgeCost&& edge_cost, const std::vector<std::uint32_t>* blocked, double slope,
-                                                 double max_cost, const Cancellation* cancel = nullptr) {
+                                                 EdgeCost&& edge_cost, const std::vector<std::uint32_t>* blocked,
+                                                 const CostBounds& bounds, double max_cost,
+                                                 const Cancellation* cancel = nullptr) {
   if (from == to) return {from};
-  const auto& P = mesh.positions();
-  const auto potential = [&](std::uint32_t v) {
-    return 0.5 * slope * ((P[to] - P[v]).norm() - (P[from] - P[v]).norm());
-  };
+  const AveragePotential potential(mesh, from, to, bounds);
   using Entry = std::pair<double, std::uint32_t>;  // (cost + signed potential, vertex)
   using Queue = std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>>;
   SearchScratch* side[2] = {&search_scratch(0), &search_scratch(1)};
@@ -204,8 +242,8 @@ std::vector<std::uint32_t> cheapest_path_between(const PreparedMesh& mesh, std::
 inline std::vector<std::uint32_t> shortest_path_between(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
                                                         double max_length) {
   return cheapest_path_between(
-      mesh, from, to, [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths()[k]; }, nullptr, 1.0,
-      max_length);
+      mesh, from, to, [&mesh](std::uint32_t, std::uint32_t k) { return mesh.neighbor_edge_lengths()[k]; }, nullptr,
+      CostBounds{1.0, 1.0}, max_length);
 }
 
 /// The shortest path by edge length from `from` to the first vertex `is_goal` accepts, no

@@ -55,7 +55,7 @@ void expect_same_paths(const PreparedMesh& mesh, const std::string& name) {
   for (const auto& [a, b] : random_pairs(mesh, 12)) {
     const auto goal = [b = b](std::uint32_t v) { return v == b; };
     const auto plain = cheapest_edge_path(mesh, a, goal, cost, no_heuristic, HUGE_VAL);
-    const auto both = cheapest_path_between(mesh, a, b, cost, nullptr, 0.05, HUGE_VAL);
+    const auto both = cheapest_path_between(mesh, a, b, cost, nullptr, CostBounds{0.05}, HUGE_VAL);
     ASSERT_FALSE(plain.empty()) << name;
     EXPECT_EQ(both, plain) << name << ": feature-weighted " << a << " -> " << b;
     EXPECT_NEAR(path_cost(mesh, both, cost), path_cost(mesh, plain, cost), 1e-12 * path_cost(mesh, plain, cost));
@@ -107,11 +107,11 @@ TEST(EdgeSearch, BlockedVerticesAreAvoidedExceptAtTheEnds) {
   const auto cost = feature_cost(*mesh);
   for (const auto& [a, b] : random_pairs(*mesh, 8)) {
     // Block every vertex of the plain path but its ends: the new path must go round it.
-    const auto first = cheapest_path_between(*mesh, a, b, cost, nullptr, 0.05, HUGE_VAL);
+    const auto first = cheapest_path_between(*mesh, a, b, cost, nullptr, CostBounds{0.05}, HUGE_VAL);
     std::vector<std::uint32_t> blocked(first.begin() + 1, first.end() - 1);
     std::sort(blocked.begin(), blocked.end());
     const auto open = [&](std::uint32_t v) { return !std::binary_search(blocked.begin(), blocked.end(), v); };
-    const auto around = cheapest_path_between(*mesh, a, b, cost, &blocked, 0.05, HUGE_VAL);
+    const auto around = cheapest_path_between(*mesh, a, b, cost, &blocked, CostBounds{0.05}, HUGE_VAL);
     const auto plain = cheapest_edge_path(
         *mesh, a, [b = b](std::uint32_t v) { return v == b; },
         [&](std::uint32_t v, std::uint32_t k) { return open(mesh->neighbors()[k]) || mesh->neighbors()[k] == b ? cost(v, k) : -1.0; },
@@ -144,9 +144,9 @@ TEST(EdgeSearch, AnEndWalledOffIsNoPath) {
                                   mesh->neighbors().begin() + mesh->neighbor_offsets()[b + 1]);
   std::sort(wall.begin(), wall.end());
   const auto length = [&](std::uint32_t, std::uint32_t k) { return mesh->neighbor_edge_lengths()[k]; };
-  EXPECT_TRUE(cheapest_path_between(*mesh, a, b, length, &wall, 1.0, HUGE_VAL).empty());
-  EXPECT_TRUE(cheapest_path_between(*mesh, b, a, length, &wall, 1.0, HUGE_VAL).empty());
-  EXPECT_TRUE(cheapest_path_between(*mesh, a, b, length, &wall, 1.0, 1e9).empty());
+  EXPECT_TRUE(cheapest_path_between(*mesh, a, b, length, &wall, CostBounds{1.0}, HUGE_VAL).empty());
+  EXPECT_TRUE(cheapest_path_between(*mesh, b, a, length, &wall, CostBounds{1.0}, HUGE_VAL).empty());
+  EXPECT_TRUE(cheapest_path_between(*mesh, a, b, length, &wall, CostBounds{1.0}, 1e9).empty());
 }
 
 }  // namespace
