@@ -20,6 +20,8 @@
 //   --fitted             lines with the fitted curve too (fitted.enabled); its own time (not in
 //                        total) is printed under each row
 //   --options JSON       line options as the API takes them, e.g. '{"second_strip": false}'
+//   --per-line           every line's figures on stderr, tab-separated (what makes a slow line
+//                        slow): mesh, keys, stage times, iterations, pieces, strip faces, edges
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -109,7 +111,8 @@ double percentile(std::vector<double> v, double q) {
 }
 
 // `lines` lines on `mesh` with keys picked by `mode` (the same seed for every mesh and mode).
-LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, const FeatureLineOptions& options) {
+LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, const FeatureLineOptions& options,
+                  const std::string& per_line_name) {
   std::mt19937_64 rng(20041101);
   std::vector<double> initial, strip, flatten, snake, total, iterations, per_piece, fitted_ms;
   LineRow row;
@@ -128,6 +131,11 @@ LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, const Featu
     iterations.push_back(r.iterations);
     if (r.pieces > 0) per_piece.push_back(double(r.iterations) / double(r.pieces));
     row.fallbacks += r.initial.fallbacks.size();
+    if (!per_line_name.empty())
+      std::fprintf(stderr, "%s\t%s\t%u,%u,%u\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%zu\t%zu\t%zu\t%zu\n",
+                   per_line_name.c_str(), to_string(mode), request.keys[0], request.keys[1], request.keys[2],
+                   r.timings.initial_ms, r.timings.strip_ms, r.timings.flatten_ms, r.timings.snake_ms, r.timings.total_ms,
+                   r.iterations, r.pieces, r.strip_faces, r.initial.vertices.size() - 1);
   }
   row.lines = total.size();
   row.initial = median(initial), row.strip = median(strip), row.flatten = median(flatten), row.snake = median(snake);
@@ -153,6 +161,7 @@ int main(int argc, char** argv) {
   // them), to compare a change with what it replaced.
   FeatureLineOptions options;
   std::string dump_dir;
+  bool per_line = false;
   std::vector<std::string> meshes;
   std::vector<KeyMode> modes{KeyMode::feature, KeyMode::random};
   for (int i = 1; i < argc; ++i) {
@@ -162,6 +171,7 @@ int main(int argc, char** argv) {
     else if (arg == "--dump-curvature" && i + 1 < argc) dump_dir = argv[++i];
     else if (arg == "--no-crest") options.crest.enabled = false;
     else if (arg == "--fitted") options.fitted.enabled = true;
+    else if (arg == "--per-line") per_line = true;
     else if (arg == "--options" && i + 1 < argc) apply_options_json(nlohmann::json::parse(argv[++i]), options);
     else if (arg == "--keys" && i + 1 < argc) {
       const std::string which = argv[++i];
@@ -200,7 +210,7 @@ int main(int argc, char** argv) {
       breakdowns.emplace_back(name, breakdown);
       if (!dump_dir.empty()) dump_curvature(*mesh, dump_dir + "/" + name + ".curvature");
       for (const KeyMode mode : modes) {
-        const LineRow row = run_lines(*mesh, mode, lines, options);
+        const LineRow row = run_lines(*mesh, mode, lines, options, per_line ? name : std::string());
         print_row(name, mode, *mesh, load_ms, row);
         auto& [smallest, largest] = extremes[int(mode)];
         if (mesh->statistics().faces < smallest.faces) smallest = {mesh->statistics().faces, row.median_total};

@@ -189,9 +189,11 @@ void resample(const SnakeRun& run, std::vector<StripPoint>& points, double dampi
 }
 
 // The linear system of Eq. (15) and its buffers, kept across iterations: it is refactored only
-// when resampling changed the number of points.
+// when resampling changed the number of points. The matrices are stored whole (both triangles);
+// the solver reads the upper one, which Eigen factorises in place when there is no reordering
+// (from the lower one it would copy the matrix into upper storage before every factorisation).
 struct SnakeSystem {
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> solver;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> solver;
   Eigen::SparseMatrix<double> A, M;
   /// A's block over the interior points: M's pattern, entry for entry (normal step).
   Eigen::SparseMatrix<double> A_interior;
