@@ -26,7 +26,14 @@ struct JetFit {
   double k_max = 0, k_min = 0;
   double residual = 0;  ///< weighted RMS of the fit's residuals, length units
   bool ok = false;
+  bool lopsided = false;  ///< a cubic refused: the neighbourhood lies to one side of the vertex
 };
+
+// A cubic over a neighbourhood cut off on one side (the mesh's border, a crease the gathering
+// stops at) extrapolates its odd terms to the vertex: its weighted centroid, in fit radii from
+// the vertex, above this (about 0.4 for a half disc, under 0.1 inside an irregular mesh) leaves
+// the vertex to the quadric.
+constexpr double kLopsidedCentroid = 0.1;
 
 // Gathers the vertices within `radius` of v reachable through vertices that are themselves
 // within it (a breadth-first search over edges, so the other side of a thin part is not
@@ -58,10 +65,22 @@ void gather(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, con
   }
 }
 
-// Weighted least-squares fit of the height h = c0 + c1 u + c2 w + c3 u^2 + c4 uw + c5 w^2 over
-// the neighbourhood, in a frame whose z axis is the neighbourhood's mean normal, coordinates
-// scaled by the radius for conditioning. The principal curvatures are the eigenvalues of the
-// graph's shape operator I^-1 II at the origin, so a tilted frame is corrected by c1, c2.
+// The monomials of a jet in (u, w) up to its degree: Terms 6 (quadric) or 10 (cubic).
+template <int Terms>
+Eigen::Matrix<double, Terms, 1> jet_monomials(double u, double w) {
+  // Set coefficient by coefficient: perf put a sixth of the fit's samples on Eigen's comma initializer.
+  Eigen::Matrix<double, Terms, 1> row;
+  row[0] = 1, row[1] = u, row[2] = w, row[3] = u * u, row[4] = u * w, row[5] = w * w;
+  if constexpr (Terms == 10) row[6] = u * u * u, row[7] = u * u * w, row[8] = u * w * w, row[9] = w * w * w;
+  return row;
+}
+
+// Weighted least-squares fit of the height h = c0 + c1 u + c2 w + c3 u^2 + c4 uw + c5 w^2 (+ the
+// cubic's c6 u^3 + c7 u^2 w + c8 u w^2 + c9 w^3) over the neighbourhood, in a frame whose z axis
+// is the neighbourhood's mean normal, coordinates scaled by the radius for conditioning. The
+// principal curvatures are the eigenvalues of the graph's shape operator I^-1 II at the origin
+// (the cubic terms vanish there to second order), so a tilted frame is corrected by c1, c2.
+template <int Terms>
 JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N, std::uint32_t v,
                const std::vector<std::uint32_t>& hood, double radius, std::vector<double>& weights) {
   JetFit fit;
@@ -81,26 +100,30 @@ JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::V
   if (!(n.norm() > 1e-12)) return fit;
   n.normalize();
   const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
-  Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
-  Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix<double, Terms, Terms> A = Eigen::Matrix<double, Terms, Terms>::Zero();
+  Eigen::Matrix<double, Terms, 1> b = Eigen::Matrix<double, Terms, 1>::Zero();
   double weight_sum = 0, hh = 0;
   for (std::size_t i = 0; i < hood.size(); ++i) {
     const Eigen::Vector3d x = (P[hood[i]] - P[v]) * inv_r;
-    const double u = x.dot(t1), s = x.dot(t2), h = x.dot(n);
+    const double h = x.dot(n);
     const double weight = weights[i];
-    // Set coefficient by coefficient: perf put a sixth of the fit's samples on Eigen's comma initializer.
-    Eigen::Matrix<double, 6, 1> row;
-    row[0] = 1, row[1] = u, row[2] = s, row[3] = u * u, row[4] = u * s, row[5] = s * s;
+    const Eigen::Matrix<double, Terms, 1> row = jet_monomials<Terms>(x.dot(t1), x.dot(t2));
     A.noalias() += (weight * row) * row.transpose();
     b += weight * h * row;
     weight_sum += weight;
     hh += weight * h * h;
   }
-  // A neighbourhood on a line or too few points leaves the quadric undetermined.
-  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(A);
+  if (Terms == 10 && std::hypot(A(1, 0), A(2, 0)) > kLopsidedCentroid * A(0, 0)) {
+    fit.lopsided = true;
+    return fit;
+  }
+  // A neighbourhood on a line or too few points leaves the jet undetermined. (Within the unit
+  // disc the cubic's columns are smaller than the quadric's, hence its looser bound.)
+  const Eigen::LDLT<Eigen::Matrix<double, Terms, Terms>> ldlt(A);
   const auto d = ldlt.vectorD();
-  if (ldlt.info() != Eigen::Success || !(d.minCoeff() > 1e-9 * d.maxCoeff())) return fit;
-  const Eigen::Matrix<double, 6, 1> c = ldlt.solve(b);
+  const double conditioning = Terms == 6 ? 1e-9 : 1e-12;
+  if (ldlt.info() != Eigen::Success || !(d.minCoeff() > conditioning * d.maxCoeff())) return fit;
+  const Eigen::Matrix<double, Terms, 1> c = ldlt.solve(b);
   const double c1 = c[1], c2 = c[2];
   const double g = std::sqrt(1 + c1 * c1 + c2 * c2);
   Eigen::Matrix2d first, second;
@@ -135,9 +158,10 @@ std::vector<double> local_edge_lengths(const AdjacencyView& adj) {
 // Returns the per-vertex residuals in local edge lengths (negative where no fit was made).
 std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N,
                             const AdjacencyView& adj, const std::vector<char>& on_crease,
-                            const std::vector<double>& local, double radius, std::size_t stride,
+                            const std::vector<char>& boundary, const std::vector<double>& local, double radius,
+                            std::size_t stride,
                             const std::vector<double>& fallback, CurvatureField& field, const Cancellation* cancel,
-                            Executor& executor) {
+                            Executor& executor, JetDegree degree = JetDegree::quadric) {
   const std::size_t n = P.size();
   std::vector<double> residual(n, -1.0);
   struct Scratch {
@@ -162,7 +186,12 @@ std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::ve
       // Too few points (coarse or skinny neighbourhoods) widen the radius a few times.
       for (int attempt = 0; attempt < 4 && !fit.ok; ++attempt, r *= 1.5) {
         gather(P, adj, on_crease, std::uint32_t(v), r, stamp, ++generation, hood);
-        if (hood.size() >= 8) fit = fit_jet(P, N, std::uint32_t(v), hood, r, weights);
+        if (hood.size() < 8) continue;
+        // Near the mesh's border the cubic's odd terms extrapolate from one side: quadrics there.
+        const bool cubic = degree == JetDegree::cubic &&
+                           std::none_of(hood.begin(), hood.end(), [&](std::uint32_t u) { return boundary[u] != 0; });
+        if (cubic) fit = fit_jet<10>(P, N, std::uint32_t(v), hood, r, weights);
+        if (!cubic || fit.lopsided) fit = fit_jet<6>(P, N, std::uint32_t(v), hood, r, weights);
       }
       if (!fit.ok) continue;
       field.k_max[v] = fit.k_max;
@@ -467,15 +496,22 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
     constexpr double kProbeRadius = 2;
     const std::size_t stride = std::max<std::size_t>(1, n / 20000);
     std::vector<double> residual =
-        fit_all(positions, normals, adjacency, on_crease, local, kProbeRadius, stride, field.mean, field, cancel, executor);
+        fit_all(positions, normals, adjacency, on_crease, mesh.boundary_vertex, local, kProbeRadius, stride, field.mean, field,
+                cancel, executor);
     residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return r < 0; }), residual.end());
     field.noise = median_of(residual);
     field.timings.noise_ms = lap_ms(clock);
       // Wider neighbourhoods average noise away (the variance of a fitted curvature falls as
     // radius^-6 at a fixed density) but blur features; grow the radius with the noise only.
     field.radius = options.radius > 0 ? options.radius : std::clamp(2 + 100 * field.noise, kProbeRadius, 6.0);
-    if (field.radius != kProbeRadius || stride != 1)
-      fit_all(positions, normals, adjacency, on_crease, local, field.radius, 1, field.mean, field, cancel, executor);
+    // The probe's quadrics serve as the field itself when they are what was asked for.
+    field.jet_degree = options.jet_degree != JetDegree::automatic ? options.jet_degree
+                       : field.radius > CurvatureLimits::cubic_jet_above ? JetDegree::cubic
+                                                                          : JetDegree::quadric;
+    if (field.radius != kProbeRadius || stride != 1 || field.jet_degree != JetDegree::quadric)
+      fit_all(positions, normals, adjacency, on_crease, mesh.boundary_vertex, local, field.radius, 1, field.mean, field,
+              cancel, executor,
+              field.jet_degree);
     field.timings.jet_ms = lap_ms(clock);
   }
   SmoothedField smoothed = start_smoothing(field, adjacency);
