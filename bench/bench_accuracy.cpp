@@ -108,6 +108,8 @@ std::vector<Variant> all_variants() {
       }),
       variant("marching", [](PrepareOptions&, FeatureLineOptions& o) { o.initial.method = InitialMethod::marching; }),
       variant("jet, no smoothing", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.smoothing_passes = 0; }),
+      variant("quadric jets everywhere (jet_degree quadric)",
+              [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.jet_degree = JetDegree::quadric; }),
       variant("paper's strip layout", [](PrepareOptions&, FeatureLineOptions& o) {
         o.strip.flattening = StripFlattening::similar_triangles;
       }),
@@ -129,7 +131,8 @@ std::vector<Variant> all_variants() {
 std::string prepare_key(const PrepareOptions& p) {
   const auto& c = p.curvature;
   return to_string(c.method) + " r=" + std::to_string(c.radius) + " s=" + std::to_string(c.smoothing_passes) +
-         " a=" + std::to_string(c.crease_angle);
+         " a=" + std::to_string(c.crease_angle) + " d=" + to_string(c.jet_degree) +
+         " t=" + std::to_string(c.smoothing_tolerance);
 }
 
 // ---------------------------------------------------------------------------------
