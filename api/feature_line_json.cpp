@@ -140,6 +140,7 @@ json mesh_info_to_json(const PreparedMesh& m, double load_ms) {
         {"method", s.curvature_method},
         {"noise", s.noise},
         {"radius", s.curvature_radius},
+        {"jet_degree", s.jet_degree.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.jet_degree)},
         {"smoothing_passes", s.curvature_smoothing_passes},
         {"crease_angle", s.crease_angle},
         {"crease_edges", s.crease_edges}}},

@@ -64,6 +64,7 @@ struct MeshStatistics {
   std::string curvature_method;   ///< "jet" or "cotangent"
   double noise = 0;               ///< estimated RMS noise along the normal, in local edge lengths
   double curvature_radius = 0;    ///< jet radius used, local edge lengths (0: cotangent)
+  std::string jet_degree;         ///< "quadric" or "cubic": the jets fitted ("" with cotangent)
   int curvature_smoothing_passes = 0;  ///< Laplacian passes over the principal curvatures
   double crease_angle = 0;        ///< dihedral angle above which an edge is a crease, degrees
   std::size_t crease_edges = 0;   ///< edges sharper than that
