@@ -121,6 +121,7 @@ PathLandmarks build_path_landmarks(const PreparedMesh& mesh, Executor& executor,
   // which keeps them bounds.
   const double range = PathLandmarks::kUnreachable - 1;
   const double fine = mesh.statistics().mean_edge_length * PathLandmarks::kFloor / 1000;
+  if (!(fine > 0) || !std::isfinite(fine)) return {};  // no edge length to measure in: no bounds
   std::uint32_t farthest = 0;
   for (auto c : cheapest_units_from(mesh, landmarks[0], in_units(fine, double(kLongest)), cancel))
     if (c != kNever) farthest = std::max(farthest, c);
