@@ -204,6 +204,9 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "lengths; also within the strip's rings)", "", &O::crest, &CrestOptions::max_radius),
       option<O>("crest.max_shift", within(CrestOptions::max_shift_range), "Crest localisation: largest move of a point "
                 "across the line (strip edge lengths)", "", &O::crest, &CrestOptions::max_shift),
+      option<O>("crest.max_key_shift", within(CrestOptions::max_key_shift_range), "Crest localisation: largest move "
+                "of a key (a pinned end) across the line (strip edge lengths): the vertex nearest a crest can lie "
+                "further from it than half an edge", "", &O::crest, &CrestOptions::max_key_shift),
       option<O>("crest.smoothing_passes", within(CrestOptions::smoothing_passes_range), "Crest localisation: (1, 2, 1)/4 "
                 "passes over the moves along the line", "", &O::crest, &CrestOptions::smoothing_passes),
       option<O>("fitted.enabled", {}, "Also answer a smooth space curve fitted to the line's neighbourhood (crease sides "
@@ -227,7 +230,7 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "split where the line turns by more than this within an edge (degrees)", "", &O::fitted,
                 &FittedCurveOptions::corner_angle),
       option<O>("crest.move_keys", {}, "Crest localisation: keys (and other pinned points) move across the line to the "
-                "crest too, within max_shift (false: the line passes through the key vertices)", "--keys-on-vertices",
+                "crest too, within max_key_shift (false: the line passes through the key vertices)", "--keys-on-vertices",
                 &O::crest, &CrestOptions::move_keys),
       option<O>("crest.follow_bend", {}, "Crest localisation: fits measure across the line from its bend, so a bent "
                 "crest is not read as an offset into the bend (false: from its tangent)", "", &O::crest, &CrestOptions::follow_bend),

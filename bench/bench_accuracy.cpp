@@ -117,6 +117,8 @@ std::vector<Variant> all_variants() {
       variant("jet, fixed radius 3", [](PrepareOptions& p, FeatureLineOptions&) { p.curvature.radius = 3; }),
       variant("no crest localisation (the snake's line)", [](PrepareOptions&, FeatureLineOptions& o) { o.crest.enabled = false; }),
       variant("keys on their vertices (crest.move_keys off)", [](PrepareOptions&, FeatureLineOptions& o) { o.crest.move_keys = false; }),
+      variant("keys within half an edge (crest.max_key_shift 0.5)",
+              [](PrepareOptions&, FeatureLineOptions& o) { o.crest.max_key_shift = 0.5; }),
       variant("tangent-frame crest fits (crest.follow_bend off)", [](PrepareOptions&, FeatureLineOptions& o) { o.crest.follow_bend = false; }),
       variant("one strip per piece (second_strip off)", [](PrepareOptions&, FeatureLineOptions& o) { o.second_strip = false; }),
       variant("before bent fits, moving keys and second strips", [](PrepareOptions&, FeatureLineOptions& o) {

@@ -21,7 +21,8 @@
 //                        total) is printed under each row
 //   --options JSON       line options as the API takes them, e.g. '{"second_strip": false}'
 //   --per-line           every line's figures on stderr, tab-separated (what makes a slow line
-//                        slow): mesh, keys, stage times, iterations, pieces, strip faces, edges
+//                        slow): mesh, keys, stage times, iterations, pieces, strip faces, edges,
+//                        strength (the pieces' mean feature strength, weighted by their edges)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -110,6 +111,18 @@ double percentile(std::vector<double> v, double q) {
   return v[std::size_t(q * double(v.size() - 1))];
 }
 
+// The answer's feature strength: its pieces' mean strength (the line each piece kept), weighted
+// by their edges. What a faster variant must not lose.
+double line_strength(const FeatureLineResult& r) {
+  double sum = 0, edges = 0;
+  for (const PieceReport& p : r.piece_reports) {
+    const bool refined = p.kept == PieceKept::refined || p.kept == PieceKept::crease_fit;
+    sum += double(p.edges) * (refined ? p.refined_strength : p.initial_strength);
+    edges += double(p.edges);
+  }
+  return edges > 0 ? sum / edges : 0;
+}
+
 // `lines` lines on `mesh` with keys picked by `mode` (the same seed for every mesh and mode).
 LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, const FeatureLineOptions& options,
                   const std::string& per_line_name) {
@@ -132,10 +145,10 @@ LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, const Featu
     if (r.pieces > 0) per_piece.push_back(double(r.iterations) / double(r.pieces));
     row.fallbacks += r.initial.fallbacks.size();
     if (!per_line_name.empty())
-      std::fprintf(stderr, "%s\t%s\t%u,%u,%u\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%zu\t%zu\t%zu\t%zu\n",
+      std::fprintf(stderr, "%s\t%s\t%u,%u,%u\t%.3f\t%.3f\t%.3f\t%.3f\t%.3f\t%d\t%zu\t%zu\t%zu\t%.4f\n",
                    per_line_name.c_str(), to_string(mode), request.keys[0], request.keys[1], request.keys[2],
                    r.timings.initial_ms, r.timings.strip_ms, r.timings.flatten_ms, r.timings.snake_ms, r.timings.total_ms,
-                   r.iterations, r.pieces, r.strip_faces, r.initial.vertices.size() - 1);
+                   r.iterations, r.pieces, r.strip_faces, r.initial.vertices.size() - 1, line_strength(r));
   }
   row.lines = total.size();
   row.initial = median(initial), row.strip = median(strip), row.flatten = median(flatten), row.snake = median(snake);

@@ -228,8 +228,9 @@ std::vector<double> smooth_offsets(const std::vector<double>& offsets, int passe
 void check_crest_options(const CrestOptions& o) {
   using C = CrestOptions;
   if (!C::radius_range.contains(o.radius) || !C::radius_range.contains(o.max_radius) || !C::max_shift_range.contains(o.max_shift) ||
+      !C::max_key_shift_range.contains(o.max_key_shift) ||
       !C::smoothing_passes_range.contains(o.smoothing_passes))
-    throw InvalidInputError("crest options out of range (radius, max_radius " + describe(C::radius_range) + ", max_shift " +
+    throw InvalidInputError("crest options out of range (radius, max_radius " + describe(C::radius_range) + ", max_shift, max_key_shift " +
                             describe(C::max_shift_range) + ", smoothing_passes " + describe(C::smoothing_passes_range) + ")");
 }
 
@@ -284,10 +285,11 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
       continue;
     }
     const double s = fit_crest(in, points[i].uv, normals[i], bends[i], radius, kMinCrestDrop).offset;
-    if (std::abs(s) <= o.max_shift * h) offsets[i] = s, ++result.moved;
+    const double reach = (end ? o.max_key_shift : o.max_shift) * h;
+    if (std::abs(s) <= reach) offsets[i] = s, ++result.moved;
     else if (end) offsets[i] = 0;  // no crest within reach: the end stays on its vertex
     else continue;
-    if (end) moves[i == 0 ? 0 : 1] = std::abs(s) <= o.max_shift * h;
+    if (end) moves[i == 0 ? 0 : 1] = std::abs(s) <= reach;
   }
   const std::vector<double> smoothed = smooth_offsets(offsets, o.smoothing_passes);
   for (std::size_t i = 0; i < n; ++i) {

@@ -29,6 +29,10 @@ struct CrestOptions {
   double radius = 3.0;
   double max_radius = 8.0;
   double max_shift = 0.5;   ///< largest move of a point across the line, in the strip's mean edge lengths
+  /// Largest move of a pinned end (a key) across the line. The snake brings the other points to
+  /// within max_shift of the crest; a key stays on the vertex picked, and the vertex nearest a
+  /// crest can lie further from it than half an edge (up to a triangle's circumradius).
+  double max_key_shift = 1.0;
   int smoothing_passes = 4; ///< (1, 2, 1)/4 passes over the offsets along the line
   /// The line's pinned ends (its keys, and where a piece was split) move across the line to the
   /// crest too, within max_shift: a key is a vertex picked near the feature, and the line passes
@@ -42,6 +46,7 @@ struct CrestOptions {
 
   static constexpr ValidRange radius_range = closed_range(1, 12);
   static constexpr ValidRange max_shift_range = closed_range(0, 2);
+  static constexpr ValidRange max_key_shift_range = closed_range(0, 2);
   static constexpr ValidRange smoothing_passes_range = closed_range(0, 50);
 };
 

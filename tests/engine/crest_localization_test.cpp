@@ -93,6 +93,31 @@ TEST(CrestLocalization, KeysSlideOntoACrestBetweenVertices) {
   }
 }
 
+TEST(CrestLocalization, KeysMoreThanHalfAnEdgeOffReachTheCrest) {
+  // The vertex nearest a crest can lie further from it than half an edge (the snake's points are
+  // held to max_shift, half an edge, of where it left them); keys picked 0.55-0.85 e beside the
+  // straight crest move onto it within max_key_shift (1 e), and stay on their vertices below that.
+  for (const double amplitude : {0.3, -0.3}) {
+    SCOPED_TRACE(amplitude > 0 ? "ridge" : "valley");
+    const HeightField field = make_ridge_field(111, 0.2, 4, amplitude, 0.25, 0.0);
+    const auto mesh = prepare_mesh(field.mesh);
+    const double e = mean_edge_length(field.mesh);
+    FeatureLineRequest request;
+    for (const double x : {-0.7, 0.0, 0.7}) request.keys.push_back(vertex_beside_crest(field, x, 0.55, 0.85, e));
+    const auto moved = detect_feature_line(*mesh, request);
+    ASSERT_EQ(moved.key_points.size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) {
+      SCOPED_TRACE("key " + std::to_string(k));
+      EXPECT_LT(distance_to_crest(field, moved.key_points[k].x(), moved.key_points[k].y()) / e, 0.05);
+      EXPECT_GT(moved.key_moves[k] / e, 0.5);
+    }
+    request.options.crest.max_key_shift = 0.5;
+    const auto held = detect_feature_line(*mesh, request);
+    for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(held.key_moves[k], 0.0) << "key " << k;
+    EXPECT_LT(crest_distance(field, refined_positions(moved)).max, crest_distance(field, refined_positions(held)).max);
+  }
+}
+
 TEST(CrestLocalization, CleanCreasesStayExactWithKeysFreeToMove) {
   // A CAD crease is kept exactly, keys included: a crease vertex is a kink, not a peak to move to.
   for (auto tessellation : {SlabTessellation::skinny, SlabTessellation::fine}) {
