@@ -44,6 +44,29 @@ TEST(CrestLocalization, ArcCrestIsNotCutInsideItsBend) {
     }
 }
 
+TEST(CrestLocalization, CleanCoarseArcKeepsItsLocalisedPieces) {
+  // A clean 5k-triangle arc (seed 2): the crest passes between vertices, and a line on it reads a
+  // little weaker on the linearly interpolated field than the snake's line through vertices
+  // (0.13% on its second piece). Dropping that piece left the last key and the start of the piece
+  // after the middle key 0.3 e off; kept, the whole line is within 0.15 e.
+  for (const double amplitude : {0.3, -0.3}) {
+    SCOPED_TRACE(amplitude > 0 ? "ridge" : "valley");
+    CurvedCrestOptions options;
+    options.n = 51;
+    options.seed = 2;
+    options.amplitude = amplitude;
+    const CurvedCrestField field = make_curved_crest_field(options);
+    const auto mesh = prepare_mesh(field.field.mesh);
+    const double e = mean_edge_length(field.field.mesh);
+    FeatureLineRequest request;
+    request.keys = keys_on_curved_crest(field, {0.0, 0.5, 1.0});
+    const auto points = refined_positions(detect_feature_line(*mesh, request));
+    const auto distance = arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.distance(p.x(), p.y()) / e; });
+    EXPECT_LT(distance.max, 0.15);
+    EXPECT_LT(distance.mean, 0.05);
+  }
+}
+
 // A vertex beside the straight crest y = 0.1234 at x, between `low` and `high` e off it.
 std::uint32_t vertex_beside_crest(const HeightField& field, double x, double low, double high, double e) {
   std::uint32_t best = 0;
