@@ -80,17 +80,31 @@ std::uint32_t vertex_beside_crest(const HeightField& field, double x, double low
   return best;
 }
 
+// The straight ridge (or valley) at y = 0.1234 on a 24k-triangle field, prepared, and a request
+// whose three keys (at x = -0.7, 0, 0.7) lie `low`-`high` e beside its crest.
+struct KeysBesideCrest {
+  HeightField field;
+  std::shared_ptr<const PreparedMesh> mesh;
+  double e = 0;
+  FeatureLineRequest request;
+};
+
+KeysBesideCrest keys_beside_crest(double amplitude, double low, double high) {
+  KeysBesideCrest c;
+  c.field = make_ridge_field(111, 0.2, 4, amplitude, 0.25, 0.0);
+  c.mesh = prepare_mesh(c.field.mesh);
+  c.e = mean_edge_length(c.field.mesh);
+  for (const double x : {-0.7, 0.0, 0.7}) c.request.keys.push_back(vertex_beside_crest(c.field, x, low, high, c.e));
+  return c;
+}
+
 TEST(CrestLocalization, KeysSlideOntoACrestBetweenVertices) {
   // Straight ridge and valley at y = 0.1234, between grid rows; keys picked 0.2-0.4 e beside it.
   // With move_keys the line passes within 0.05 e of the crest at each key (and meets itself
   // there: the key's point is a point of the line); without, through the key vertices.
   for (const double amplitude : {0.3, -0.3}) {
     SCOPED_TRACE(amplitude > 0 ? "ridge" : "valley");
-    const HeightField field = make_ridge_field(111, 0.2, 4, amplitude, 0.25, 0.0);
-    const auto mesh = prepare_mesh(field.mesh);
-    const double e = mean_edge_length(field.mesh);
-    FeatureLineRequest request;
-    for (const double x : {-0.7, 0.0, 0.7}) request.keys.push_back(vertex_beside_crest(field, x, 0.2, 0.4, e));
+    auto [field, mesh, e, request] = keys_beside_crest(amplitude, 0.2, 0.4);
     const auto moved = detect_feature_line(*mesh, request);
     ASSERT_EQ(moved.key_points.size(), 3u);
     ASSERT_EQ(moved.key_moves.size(), 3u);
@@ -122,11 +136,7 @@ TEST(CrestLocalization, KeysMoreThanHalfAnEdgeOffReachTheCrest) {
   // straight crest move onto it within max_key_shift (1 e), and stay on their vertices below that.
   for (const double amplitude : {0.3, -0.3}) {
     SCOPED_TRACE(amplitude > 0 ? "ridge" : "valley");
-    const HeightField field = make_ridge_field(111, 0.2, 4, amplitude, 0.25, 0.0);
-    const auto mesh = prepare_mesh(field.mesh);
-    const double e = mean_edge_length(field.mesh);
-    FeatureLineRequest request;
-    for (const double x : {-0.7, 0.0, 0.7}) request.keys.push_back(vertex_beside_crest(field, x, 0.55, 0.85, e));
+    auto [field, mesh, e, request] = keys_beside_crest(amplitude, 0.55, 0.85);
     const auto moved = detect_feature_line(*mesh, request);
     ASSERT_EQ(moved.key_points.size(), 3u);
     for (std::size_t k = 0; k < 3; ++k) {
