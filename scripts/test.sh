@@ -18,9 +18,11 @@ echo "== ctest (ASan + UBSan)"
 BUILD_DIR=build-sanitize scripts/setup.sh -DFEATURELINE_SANITIZE=ON -DFEATURELINE_BUILD_BENCH=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo
 # The browser tests run once, against the Release server (they drive Chromium, not our code);
 # the first-contact tests run scripts/run.sh and the installed programs, which are Release builds;
-# the image test builds the image from the sources, whatever the build tree.
+# the image test builds the image from the sources, whatever the build tree; the orchestration
+# tests (the cluster's nginx and Redis, the deploy files, the answers against the OpenAPI
+# contract) exercise the same server code as integration.server and integration.store, which do run here.
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-  ctest --test-dir build-sanitize --output-on-failure -j "$(nproc)" -LE "web|first_contact|image" || status=1
+  ctest --test-dir build-sanitize --output-on-failure -j "$(nproc)" -LE "web|first_contact|image|orchestration" || status=1
 echo "== fuzzing (libFuzzer + ASan + UBSan): every harness over its seeds and a fixed number of mutations"
 # scripts/fuzz.sh NAME SECONDS runs one harness for longer.
 BUILD_DIR=build-fuzz scripts/setup.sh -DCMAKE_CXX_COMPILER=clang++ -DFEATURELINE_FUZZ=ON -DFEATURELINE_SANITIZE=ON \
