@@ -20,6 +20,9 @@
 //   --fitted             lines with the fitted curve too (fitted.enabled); its own time (not in
 //                        total) is printed under each row
 //   --options JSON       line options as the API takes them, e.g. '{"second_strip": false}'
+//   --compare-serial     every line twice, alternately first: on the default executor (a line's
+//                        pieces side by side) and on one thread (one after another); prints
+//                        both medians, p90s and means under each row
 //   --per-line           every line's figures on stderr, tab-separated (what makes a slow line
 //                        slow): mesh, keys, stage times, iterations, pieces, strip faces, edges,
 //                        strength (the pieces' mean feature strength, weighted by their edges)
@@ -27,6 +30,7 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <numeric>
 #include <random>
 #include <string>
 #include <unordered_set>
@@ -36,6 +40,7 @@
 #include "engine/errors.h"
 #include "engine/feature_line.h"
 #include "engine/mesh_io.h"
+#include "engine/thread_pool.h"
 #include "bench/feature_keys.h"
 
 namespace {
@@ -103,6 +108,8 @@ struct LineRow {
   double initial = 0, strip = 0, flatten = 0, snake = 0, median_total = 0, p90_total = 0, iterations = 0,
          per_piece = 0;
   double fitted = -1;  ///< median time of the fitted curve (--fitted), -1 without it
+  /// --compare-serial: the same lines' totals with the pieces side by side and on one thread
+  std::vector<double> side_by_side, serial;
 };
 
 double percentile(std::vector<double> v, double q) {
@@ -125,7 +132,7 @@ double line_strength(const FeatureLineResult& r) {
 
 // `lines` lines on `mesh` with keys picked by `mode` (the same seed for every mesh and mode).
 LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, const FeatureLineOptions& options,
-                  const std::string& per_line_name) {
+                  const std::string& per_line_name, bool compare_serial) {
   std::mt19937_64 rng(20041101);
   std::vector<double> initial, strip, flatten, snake, total, iterations, per_piece, fitted_ms;
   LineRow row;
@@ -134,7 +141,14 @@ LineRow run_lines(const PreparedMesh& mesh, KeyMode mode, int lines, const Featu
     request.keys = mode == KeyMode::feature ? pick_feature_keys(mesh, rng) : pick_random_keys(mesh, rng);
     request.options = options;
     if (request.keys.empty()) break;
+    SerialExecutor one_thread;
+    FeatureLineRequest serial = request;
+    serial.executor = &one_thread;
+    // Alternately first, so neither finds the other's caches warm more often.
+    if (compare_serial && i % 2 == 0) row.serial.push_back(detect_feature_line(mesh, serial).timings.total_ms);
     const auto r = detect_feature_line(mesh, request);
+    if (compare_serial) row.side_by_side.push_back(r.timings.total_ms);
+    if (compare_serial && i % 2 == 1) row.serial.push_back(detect_feature_line(mesh, serial).timings.total_ms);
     if (r.fitted) fitted_ms.push_back(r.fitted->elapsed_ms);
     initial.push_back(r.timings.initial_ms);
     strip.push_back(r.timings.strip_ms);
@@ -163,6 +177,11 @@ void print_row(const std::string& name, KeyMode mode, const PreparedMesh& mesh, 
               name.c_str(), to_string(mode), mesh.statistics().faces, load_ms, mesh.prepare_ms(), r.lines, r.initial,
               r.strip, r.flatten, r.snake, r.median_total, r.p90_total, r.iterations, r.per_piece, r.fallbacks);
   if (r.fitted >= 0) std::printf("%-20s %-7s   fitted curve: median %.3f ms per line (beside total)\n", "", "", r.fitted);
+  auto mean = [](const std::vector<double>& v) { return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / double(v.size()); };
+  if (!r.serial.empty())
+    std::printf("%-20s %-7s   pieces side by side / one thread: median %.3f / %.3f ms, p90 %.3f / %.3f, mean %.3f / %.3f\n", "", "",
+                median(r.side_by_side), median(r.serial), percentile(r.side_by_side, 0.9), percentile(r.serial, 0.9),
+                mean(r.side_by_side), mean(r.serial));
 }
 
 }  // namespace
@@ -174,7 +193,7 @@ int main(int argc, char** argv) {
   // them), to compare a change with what it replaced.
   FeatureLineOptions options;
   std::string dump_dir;
-  bool per_line = false;
+  bool per_line = false, compare_serial = false;
   std::vector<std::string> meshes;
   std::vector<KeyMode> modes{KeyMode::feature, KeyMode::random};
   for (int i = 1; i < argc; ++i) {
@@ -185,6 +204,7 @@ int main(int argc, char** argv) {
     else if (arg == "--no-crest") options.crest.enabled = false;
     else if (arg == "--fitted") options.fitted.enabled = true;
     else if (arg == "--per-line") per_line = true;
+    else if (arg == "--compare-serial") compare_serial = true;
     else if (arg == "--options" && i + 1 < argc) apply_options_json(nlohmann::json::parse(argv[++i]), options);
     else if (arg == "--keys" && i + 1 < argc) {
       const std::string which = argv[++i];
@@ -223,7 +243,7 @@ int main(int argc, char** argv) {
       breakdowns.emplace_back(name, breakdown);
       if (!dump_dir.empty()) dump_curvature(*mesh, dump_dir + "/" + name + ".curvature");
       for (const KeyMode mode : modes) {
-        const LineRow row = run_lines(*mesh, mode, lines, options, per_line ? name : std::string());
+        const LineRow row = run_lines(*mesh, mode, lines, options, per_line ? name : std::string(), compare_serial);
         print_row(name, mode, *mesh, load_ms, row);
         auto& [smallest, largest] = extremes[int(mode)];
         if (mesh->statistics().faces < smallest.faces) smallest = {mesh->statistics().faces, row.median_total};

@@ -4,12 +4,13 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <deque>
+#include <exception>
 #include <string>
 #include <unordered_map>
 
 #include "engine/crease_fit.h"
 #include "engine/errors.h"
+#include "engine/executor.h"
 #include "engine/internal/edge_search.h"
 #include "engine/internal/stopwatch.h"
 
@@ -58,9 +59,9 @@ UnrolledLine unroll(const InitialLineResult& initial, bool closed) {
 
 // Pieces between pinned points. A closed line always has at least two pieces: a loop laid
 // out as one open strip would meet itself at its first key.
-std::deque<Piece> pinned_pieces(const UnrolledLine& line, bool pin_interior_keys, bool closed,
-                                std::vector<std::string>& warnings) {
-  std::deque<Piece> pieces;
+std::vector<Piece> pinned_pieces(const UnrolledLine& line, bool pin_interior_keys, bool closed,
+                                 std::vector<std::string>& warnings) {
+  std::vector<Piece> pieces;
   const std::vector<std::uint32_t>& v = line.vertices;
   if (pin_interior_keys) {
     for (std::size_t k = 0; k + 1 < line.key_at.size(); ++k) pieces.push_back({line.key_at[k], line.key_at[k + 1]});
@@ -79,7 +80,7 @@ std::deque<Piece> pinned_pieces(const UnrolledLine& line, bool pin_interior_keys
 // Clean creases are the feature itself: their runs are kept exactly. On a noisy mesh a crease
 // run is re-fitted instead of handed to the snake (see engine/crease_fit.h for why).
 void mark_crease_pieces(const PreparedMesh& pm, const FeatureLineOptions& options, const std::vector<std::uint32_t>& line,
-                        const LineContext& context, std::deque<Piece>& pieces) {
+                        const LineContext& context, std::vector<Piece>& pieces) {
   if (options.exact_crease_edges <= 0) return;
   for (Piece& piece : pieces) {
     const bool long_enough = piece.end - piece.begin >= std::size_t(options.exact_crease_edges);
@@ -167,15 +168,13 @@ void keep_initial(PieceWork& work, std::string reason) {
   work.report.reason = std::move(reason);
 }
 
-// Split where the layout folded, keeping both halves at least min_piece_edges long (the
-// paper's remedy for highly curved lines). False when the piece is too short to split.
-bool split_where_folded(const LineRun& run, const Piece& piece, const FlatStrip& flat, std::deque<Piece>& pieces) {
+// The halves to split a piece into where its layout folded, each at least min_piece_edges long
+// (the paper's remedy for highly curved lines); none when it did not fold or is too short.
+std::optional<std::array<Piece, 2>> split_where_folded(const LineRun& run, const Piece& piece, const FlatStrip& flat) {
   const std::size_t shortest = std::size_t(run.options.min_piece_edges);
-  if (flat.flipped_near_line == 0 || piece.end - piece.begin < 2 * shortest) return false;
+  if (flat.flipped_near_line == 0 || piece.end - piece.begin < 2 * shortest) return std::nullopt;
   const std::size_t at = std::clamp(piece.begin + flat.first_flip_line_index, piece.begin + shortest, piece.end - shortest);
-  pieces.push_front({at, piece.end, false});
-  pieces.push_front({piece.begin, at, false});
-  return true;
+  return std::array<Piece, 2>{Piece{piece.begin, at}, Piece{at, piece.end}};
 }
 
 // A surface point in the strip's plane, or none when its face is not laid out (two look-ups per
@@ -240,14 +239,20 @@ bool reaches_border(const FeatureStrip& strip, const std::vector<StripPoint>& po
   return false;
 }
 
-// Stages 3-4 on one piece's strip, never worse than the initial line. True when the snake's line
-// reached the strip's border.
-bool snake_on_strip(const LineRun& run, const FeatureStrip& strip, const FlatStrip& flat, PieceWork& work,
-                    FeatureLineResult& result) {
-  bool border = false;
+// A pinned end whose every strip triangle folded or distorted: the piece keeps its initial line
+// rather than failing the whole line, and says so.
+void keep_initial_unrefined(PieceWork& work, const std::string& why, FeatureLineResult& result) {
+  keep_initial(work, why);
+  result.warnings.push_back("line vertices " + std::to_string(work.sub.front()) + ".." + std::to_string(work.sub.back()) +
+                            " were not refined: " + why);
+}
+
+// Stage 3b and the map back (stage 4) on the snake's line of one piece, never worse than the
+// initial line. True when the snake's line reached the strip's border.
+bool settle_snake_line(const LineRun& run, const FeatureStrip& strip, const FlatStrip& flat, const SnakeResult& snake,
+                       PieceWork& work, FeatureLineResult& result) {
+  const bool border = reaches_border(strip, snake.points);
   try {
-    const SnakeResult snake = refine_with_snake(run.pm, strip, flat, run.options.snake, run.context, run.cancel);
-    border = reaches_border(strip, snake.points);
     work.points = map_to_surface(run.pm, strip, snake.points);
     result.iterations += snake.iterations;
     work.report.iterations = snake.iterations;
@@ -264,13 +269,22 @@ bool snake_on_strip(const LineRun& run, const FeatureStrip& strip, const FlatStr
       result.refined_by_snake = true;
     }
   } catch (const GeometryError& e) {
-    // A pinned end whose every strip triangle folded or distorted: keep this piece's
-    // initial line rather than failing the whole line, and say so.
-    keep_initial(work, e.what());
-    result.warnings.push_back("line vertices " + std::to_string(work.sub.front()) + ".." + std::to_string(work.sub.back()) +
-                              " were not refined: " + e.what());
+    keep_initial_unrefined(work, e.what(), result);
   }
   return border;
+}
+
+// Stages 3-4 on one piece's strip; true when the snake's line reached the strip's border.
+bool snake_on_strip(const LineRun& run, const FeatureStrip& strip, const FlatStrip& flat, PieceWork& work,
+                    FeatureLineResult& result) {
+  std::optional<SnakeResult> snake;
+  try {
+    snake.emplace(refine_with_snake(run.pm, strip, flat, run.options.snake, run.context, run.cancel));
+  } catch (const GeometryError& e) {
+    keep_initial_unrefined(work, e.what(), result);
+    return false;
+  }
+  return settle_snake_line(run, strip, flat, *snake, work, result);
 }
 
 // The mesh vertices nearest a refined line, from `first` to `last`: each point's nearest corner,
@@ -327,38 +341,97 @@ void refine_again_nearer(const LineRun& run, PieceWork& work, FeatureLineResult&
   result.warnings.insert(result.warnings.end(), tally.warnings.begin(), tally.warnings.end());
 }
 
-// Stages 2-4 on one piece: strip, flattening, snake. False when the piece was split instead.
-bool refine_piece_with_snake(const LineRun& run, PieceWork& work, std::deque<Piece>& pieces, FeatureLineResult& result) {
-  auto t0 = Clock::now();
-  const FeatureStrip strip = extract_feature_strip(run.pm, work.sub, run.options.strip);
-  result.timings.strip_ms += ms_since(t0);
-  t0 = Clock::now();
-  // A featureless strip's snake only smooths the line: the paper's layout serves it as well as
-  // the conformal solve, which cost such lines (keys off any feature) most of their flattening.
-  StripOptions layout = run.options.strip;
-  if (layout.flattening == StripFlattening::automatic &&
-      strip_feature_strength(run.pm, strip, run.options.snake, run.context) < run.options.snake.featureless_below)
-    layout.flattening = StripFlattening::similar_triangles;
-  const FlatStrip flat = flatten_strip(run.pm, strip, layout, run.context);
-  result.timings.flatten_ms += ms_since(t0);
-  if (split_where_folded(run, work.piece, flat, pieces)) {
-    ++result.splits;
-    return false;
+// A piece after the stages that read nothing another piece decides (strip, flattening, snake),
+// which run for several pieces side by side; the crest localisation, which meets the pins the
+// piece before placed, and the map back follow in line order (finish_piece).
+struct SnakedPiece {
+  Piece piece;
+  std::optional<FeatureStrip> strip;
+  std::optional<FlatStrip> flat;
+  std::optional<SnakeResult> snake;
+  std::string unrefined;     ///< why the snake could not run on the strip (a GeometryError)
+  std::exception_ptr error;  ///< anything else (cancellation, options): rethrown in the piece's turn
+};
+
+// One pinned piece's parts after any splits where its layout folded, in line order, and what
+// making them cost.
+struct SnakedPieces {
+  std::vector<SnakedPiece> parts;
+  double strip_ms = 0, flatten_ms = 0, snake_ms = 0;
+  int splits = 0;
+};
+
+bool needs_snake(const Piece& piece) { return !piece.exact && !piece.noisy_crease && piece.end - piece.begin >= 2; }
+
+// Stages 2-3 on one piece, or on its halves when its layout folded near the line.
+void snake_piece(const LineRun& run, const Piece& piece, SnakedPieces& out) {
+  SnakedPiece part;
+  part.piece = piece;
+  try {
+    if (needs_snake(piece)) {
+      const std::vector<std::uint32_t> sub(run.line.begin() + std::ptrdiff_t(piece.begin),
+                                           run.line.begin() + std::ptrdiff_t(piece.end) + 1);
+      auto t0 = Clock::now();
+      part.strip.emplace(extract_feature_strip(run.pm, sub, run.options.strip));
+      out.strip_ms += ms_since(t0);
+      t0 = Clock::now();
+      // A featureless strip's snake only smooths the line: the paper's layout serves it as well
+      // as the conformal solve, which cost such lines (keys off any feature) most of their
+      // flattening.
+      StripOptions layout = run.options.strip;
+      if (layout.flattening == StripFlattening::automatic &&
+          strip_feature_strength(run.pm, *part.strip, run.options.snake, run.context) < run.options.snake.featureless_below)
+        layout.flattening = StripFlattening::similar_triangles;
+      part.flat.emplace(flatten_strip(run.pm, *part.strip, layout, run.context));
+      out.flatten_ms += ms_since(t0);
+      if (const auto halves = split_where_folded(run, piece, *part.flat)) {
+        ++out.splits;
+        for (const Piece& half : *halves) snake_piece(run, half, out);
+        return;
+      }
+      t0 = Clock::now();
+      try {
+        part.snake.emplace(refine_with_snake(run.pm, *part.strip, *part.flat, run.options.snake, run.context, run.cancel));
+      } catch (const GeometryError& e) {
+        part.unrefined = e.what();
+      }
+      out.snake_ms += ms_since(t0);
+    }
+  } catch (...) {
+    part.error = std::current_exception();
   }
-  if (flat.flipped_near_line > 0)
-    result.warnings.push_back("the strip around line vertices " + std::to_string(work.sub.front()) + ".." +
-                              std::to_string(work.sub.back()) + " folds over when flattened; refined where it is valid");
-  t0 = Clock::now();
-  if (snake_on_strip(run, strip, flat, work, result) && work.report.kept == PieceKept::refined && run.options.second_strip)
-    refine_again_nearer(run, work, result);
-  result.timings.snake_ms += ms_since(t0);
-  result.strip_faces += strip.triangles.size();
-  return true;
+  out.parts.push_back(std::move(part));
 }
 
-// One piece's answer: kept crease, re-fitted crease, a single edge, or the snake's line. False
-// when the piece was split instead (its halves are next in `pieces`).
-bool refine_piece(const LineRun& run, PieceWork& work, std::deque<Piece>& pieces, FeatureLineResult& result) {
+// The edges of the pieces in [first, last) that the snake will refine.
+std::size_t snake_edges(const std::vector<Piece>& pieces, std::size_t first, std::size_t last) {
+  std::size_t edges = 0;
+  for (std::size_t i = first; i < last; ++i) edges += needs_snake(pieces[i]) ? pieces[i].end - pieces[i].begin : 0;
+  return edges;
+}
+
+// snake_piece on pieces [first, last), side by side on the executor's idle threads (a 3-key
+// line's two pieces at once); none throws. The caller keeps the half with more snake edges: a
+// helper starts a fraction of a millisecond later, and the line waits for the slower half. When
+// one half has nothing for the snake (kept creases, single edges), waking a helper costs more
+// than that half.
+void snake_side_by_side(const LineRun& run, Executor& executor, const std::vector<Piece>& pieces, std::size_t first,
+                        std::size_t last, SnakedPieces* out) {
+  if (last - first == 1) return snake_piece(run, pieces[first], out[0]);
+  const std::size_t middle = first + (last - first) / 2;
+  auto front = [&] { snake_side_by_side(run, executor, pieces, first, middle, out); };
+  auto back = [&] { snake_side_by_side(run, executor, pieces, middle, last, out + (middle - first)); };
+  const std::size_t front_edges = snake_edges(pieces, first, middle), back_edges = snake_edges(pieces, middle, last);
+  if (front_edges == 0 || back_edges == 0) front(), back();
+  else if (front_edges >= back_edges) executor.run_beside(back, front);
+  else executor.run_beside(front, back);
+}
+
+// Stages 3b-4 on a snaked piece: the snake's line crest-localised from the pins placed so far
+// (and, when it reached its strip's border, refined again nearer), or the piece's kept crease,
+// re-fitted crease or initial line.
+void finish_piece(const LineRun& run, SnakedPiece& part, PieceWork& work, FeatureLineResult& result) {
+  if (part.error) std::rethrow_exception(part.error);
   if (work.piece.exact) {
     work.points = work.initial_points;
     work.report.kept = PieceKept::crease;
@@ -366,12 +439,20 @@ bool refine_piece(const LineRun& run, PieceWork& work, std::deque<Piece>& pieces
     work.points = fit_noisy_crease(run.pm, work.sub, run.options.crease_fit).points;
     work.report.kept = PieceKept::crease_fit;
     work.report.refined_strength = mean_feature_strength(run.pm, work.points, run.context.feature_sign, run.options.snake.curvature_cap);
-  } else if (work.sub.size() < 3) {
+  } else if (!needs_snake(work.piece)) {
     keep_initial(work, "a single edge");  // a single edge is already straight on the surface
   } else {
-    return refine_piece_with_snake(run, work, pieces, result);
+    if (part.flat->flipped_near_line > 0)
+      result.warnings.push_back("the strip around line vertices " + std::to_string(work.sub.front()) + ".." +
+                                std::to_string(work.sub.back()) + " folds over when flattened; refined where it is valid");
+    const auto t0 = Clock::now();
+    bool border = false;
+    if (part.snake) border = settle_snake_line(run, *part.strip, *part.flat, *part.snake, work, result);
+    else keep_initial_unrefined(work, part.unrefined, result);
+    if (border && work.report.kept == PieceKept::refined && run.options.second_strip) refine_again_nearer(run, work, result);
+    result.timings.snake_ms += ms_since(t0);
+    result.strip_faces += part.strip->triangles.size();
   }
-  return true;
 }
 
 // The line's feature sign (the request's, else the traced feature's, else that of the keys'
@@ -487,6 +568,46 @@ void report_key_points(const PreparedMesh& pm, const UnrolledLine& line, const P
   }
 }
 
+// The pins shared with crease pieces: the crease run is kept exactly (or re-fitted) through them.
+std::vector<std::size_t> crease_pins_of(const std::vector<Piece>& pieces, bool closed, std::size_t line_size) {
+  std::vector<std::size_t> pins;
+  for (const Piece& piece : pieces)
+    if (piece.exact || piece.noisy_crease) pins.insert(pins.end(), {piece.begin, piece.end});
+  if (closed)  // the first vertex is also the last
+    for (const std::size_t index : std::vector<std::size_t>(pins))
+      if (index == 0 || index + 1 == line_size) pins.insert(pins.end(), {0, line_size - 1});
+  return pins;
+}
+
+// Where the pieces meet, as they are finished in line order.
+struct PieceJoin {
+  Pins pins;
+  std::vector<std::size_t> crease_pins;
+  std::vector<char> exact;  ///< per refined point: on an exact crease run (the fitted curve keeps those)
+};
+
+// One pinned piece's parts finished in line order and appended to the refined line.
+void finish_pieces(const LineRun& run, SnakedPieces& group, PieceJoin& join, FeatureLineResult& result) {
+  result.timings.strip_ms += group.strip_ms;
+  result.timings.flatten_ms += group.flatten_ms;
+  result.timings.snake_ms += group.snake_ms;
+  result.splits += group.splits;
+  for (SnakedPiece& part : group.parts) {
+    throw_if_cancelled(run.cancel);
+    PieceWork work = start_piece(run, part.piece);
+    read_pins(join.pins, join.crease_pins, work);
+    finish_piece(run, part, work, result);
+    write_pins(join.pins, work);
+    ++result.pieces;
+    result.piece_reports.push_back(std::move(work.report));
+    // Pieces meet at pinned vertices: keep the shared point once.
+    std::vector<SurfacePoint>& refined = result.refined;
+    const std::size_t first = refined.empty() ? 0 : 1;
+    refined.insert(refined.end(), work.points.begin() + std::ptrdiff_t(first), work.points.end());
+    if (run.options.fitted.enabled) join.exact.resize(refined.size(), work.piece.exact);
+  }
+}
+
 }  // namespace
 
 FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineRequest& request) {
@@ -517,36 +638,27 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
     return result;
   }
 
-  std::deque<Piece> pieces = pinned_pieces(line, options.pin_interior_keys, closed, result.warnings);
+  std::vector<Piece> pieces = pinned_pieces(line, options.pin_interior_keys, closed, result.warnings);
   const LineContext context = line_context(pm, request, result);
   mark_crease_pieces(pm, options, line.vertices, context, pieces);
-  std::vector<std::size_t> crease_pins;
-  for (const Piece& piece : pieces)
-    if (piece.exact || piece.noisy_crease) crease_pins.insert(crease_pins.end(), {piece.begin, piece.end});
-  if (closed)  // the first vertex is also the last
-    for (const std::size_t index : std::vector<std::size_t>(crease_pins))
-      if (index == 0 || index + 1 == line.vertices.size()) crease_pins.insert(crease_pins.end(), {0, line.vertices.size() - 1});
-  Pins pins(line.vertices.size(), closed);
+  PieceJoin join{Pins(line.vertices.size(), closed), crease_pins_of(pieces, closed, line.vertices.size()), {}};
   const LineRun run{pm, options, context, request.cancel, line.vertices};
-  std::vector<SurfacePoint>& refined = result.refined;
-  std::vector<char> exact;  // per refined point: on an exact crease run (the fitted curve keeps those)
-  while (!pieces.empty()) {
+  // As many pieces at a time as the executor has participants: their strips and snakes are held
+  // until their turn, so a line of many keys holds no more than that many at once.
+  Executor& executor = executor_or_default(request.executor);
+  const std::size_t window = std::max<std::size_t>(1, executor.workers());
+  for (std::size_t first = 0; first < pieces.size(); first += window) {
     throw_if_cancelled(request.cancel);
-    PieceWork work = start_piece(run, pieces.front());
-    pieces.pop_front();
-    read_pins(pins, crease_pins, work);
-    if (!refine_piece(run, work, pieces, result)) continue;
-    write_pins(pins, work);
-    ++result.pieces;
-    result.piece_reports.push_back(std::move(work.report));
-    // Pieces meet at pinned vertices: keep the shared point once.
-    const std::size_t first = refined.empty() ? 0 : 1;
-    refined.insert(refined.end(), work.points.begin() + std::ptrdiff_t(first), work.points.end());
-    if (options.fitted.enabled) exact.resize(refined.size(), work.piece.exact);
+    const std::size_t last = std::min(pieces.size(), first + window);
+    std::vector<SnakedPieces> snaked(last - first);
+    snake_side_by_side(run, executor, pieces, first, last, snaked.data());
+    for (SnakedPieces& group : snaked) finish_pieces(run, group, join, result);
   }
+  std::vector<SurfacePoint>& refined = result.refined;
   if (closed && refined.size() > 1) refined.pop_back();  // back at the first key
+  std::vector<char> exact = std::move(join.exact);
   if (!exact.empty()) exact.resize(refined.size());
-  report_key_points(pm, line, pins, result);
+  report_key_points(pm, line, join.pins, result);
   result.refined_length = polyline_length(refined, closed);
   result.timings.total_ms = ms_since(start);
   fit_curve_when_asked(pm, options, context.feature_sign, std::move(exact), result);

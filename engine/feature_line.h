@@ -9,6 +9,7 @@
 
 #include "engine/crease_fit.h"
 #include "engine/crest_localization.h"
+#include "engine/executor.h"
 #include "engine/feature_strip.h"
 #include "engine/fitted_curve.h"
 #include "engine/initial_line.h"
@@ -71,6 +72,9 @@ struct FeatureLineRequest {
   FeatureLineOptions options;
   /// Stops the work early with CancelledError when requested (deadline, client gone); null: never.
   const Cancellation* cancel = nullptr;
+  /// Where the line's pieces are refined side by side (the server passes its engine pool, whose
+  /// idle threads then help); null: default_executor(). The answer is the same on any executor.
+  Executor* executor = nullptr;
 };
 
 /// Which line a piece of the answer is.

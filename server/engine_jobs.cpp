@@ -45,6 +45,7 @@ std::vector<FeatureLineResult> EngineJobs::run_lines(const std::shared_ptr<const
   std::vector<std::future<Timed>> futures;
   for (auto line : lines) {
     line.cancel = cancel.get();
+    line.executor = &pool_;  // idle engine threads help with its pieces; none are taken from queued jobs
     futures.push_back(submit_or_503([session, line, cancel, queued = Clock::now()] {
       const double waited = std::chrono::duration<double, std::milli>(Clock::now() - queued).count();
       return Timed{detect_feature_line(*session->mesh, line), waited};

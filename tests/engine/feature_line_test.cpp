@@ -9,8 +9,10 @@
 #include "engine/feature_line.h"
 #include "engine/mesh_io.h"
 #include "engine/scratch_memory.h"
+#include "engine/thread_pool.h"
 #include "tests/support/accuracy_meshes.h"
 #include "tests/support/line_metrics.h"
+#include "tests/support/shared_data.h"
 #include "tests/support/synthetic_meshes.h"
 
 namespace featureline {
@@ -109,6 +111,68 @@ TEST(FeatureLine, LinesAreFiniteAndScaleWithTheMeshAtTheEdgesOfTheCoordinateRang
     }
     for (const auto& p : line.refined) EXPECT_TRUE(p.position.allFinite());
   }
+}
+
+// Everything a line's answer says, to compare two runs exactly.
+void expect_same_line(const FeatureLineResult& a, const FeatureLineResult& b, const std::string& what) {
+  SCOPED_TRACE(what);
+  ASSERT_EQ(a.refined.size(), b.refined.size());
+  for (std::size_t i = 0; i < a.refined.size(); ++i) {
+    ASSERT_EQ(a.refined[i].face, b.refined[i].face) << "point " << i;
+    ASSERT_EQ(a.refined[i].position, b.refined[i].position) << "point " << i;
+  }
+  EXPECT_EQ(a.pieces, b.pieces);
+  EXPECT_EQ(a.splits, b.splits);
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.strip_faces, b.strip_faces);
+  EXPECT_EQ(a.warnings, b.warnings);
+  ASSERT_EQ(a.piece_reports.size(), b.piece_reports.size());
+  for (std::size_t i = 0; i < a.piece_reports.size(); ++i) {
+    EXPECT_EQ(a.piece_reports[i].kept, b.piece_reports[i].kept);
+    EXPECT_EQ(a.piece_reports[i].refined_strength, b.piece_reports[i].refined_strength);
+  }
+  EXPECT_EQ(a.key_points, b.key_points);
+}
+
+TEST(FeatureLine, PiecesSideBySideGiveTheSerialLine) {
+  // Pieces are refined side by side and their crest localisation then meets the pins in line
+  // order: every answer must be the one the pieces give one after another. Keys anywhere on the
+  // bunny (long pieces, second strips) and the dragon (strips that fold and are split), open and
+  // closed, 3-5 keys; five keys along a noisy ridge.
+  const auto bunny = prepare_mesh(read_mesh_file(require_shared_mesh("bunny_closed.off")));
+  const auto dragon = prepare_mesh(read_mesh_file(require_shared_mesh("dragon_25k.off")));
+  const auto ridge_field = make_ridge_field(81, 0.2, 3, 0.3, 0.25, 0.3);
+  const auto ridge = prepare_mesh(with_noise(ridge_field.mesh, 0.1, 5));
+  std::vector<std::pair<const PreparedMesh*, FeatureLineRequest>> lines;
+  for (const PreparedMesh* mesh : {bunny.get(), dragon.get()})
+    for (std::uint32_t i = 0; i < 8; ++i) {
+      FeatureLineRequest request;
+      for (std::uint32_t k = 0; k < 3 + i % 3; ++k) request.keys.push_back((i * 7919u + k * 104729u + 13u) % mesh->n_vertices());
+      request.closed = i % 4 == 3;
+      lines.emplace_back(mesh, request);
+    }
+  FeatureLineRequest along;
+  for (double x : {-0.8, -0.4, 0.0, 0.4, 0.8}) along.keys.push_back(nearest_vertex(ridge_field.mesh, x, ridge_field.crest(x)));
+  lines.emplace_back(ridge.get(), along);
+
+  SerialExecutor serial;
+  ThreadPool pool(3);
+  int splits = 0, second_pieces = 0;
+  for (std::size_t l = 0; l < lines.size(); ++l) {
+    FeatureLineRequest request = lines[l].second;
+    request.executor = &serial;
+    const FeatureLineResult expected = detect_feature_line(*lines[l].first, request);
+    splits += expected.splits;
+    second_pieces += expected.pieces > 1;
+    request.executor = &pool;
+    expect_same_line(expected, detect_feature_line(*lines[l].first, request), "line " + std::to_string(l) + " on a pool");
+    // As the server runs it: from a job on the pool, whose idle threads help.
+    auto job = pool.try_submit([&] { return detect_feature_line(*lines[l].first, request); });
+    ASSERT_TRUE(job.has_value());
+    expect_same_line(expected, job->get(), "line " + std::to_string(l) + " from a job on the pool");
+  }
+  EXPECT_GT(second_pieces, 10);  // the lines do have pieces to run side by side
+  EXPECT_GT(splits, 0);          // and a fold split into halves inside one task
 }
 
 TEST(FeatureLine, ConcurrentRequestsOnOneMeshAgree) {
