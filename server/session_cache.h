@@ -49,7 +49,7 @@ class SessionCache {
     std::function<Clock::time_point()> now = [] { return Clock::now(); };  ///< injectable for tests
     /// Memory outside the sessions that the budget must leave room for (the server passes the
     /// engine's per-thread scratch, engine/scratch_memory.h): evictions make room for it too.
-    std::function<std::size_t()> other_bytes;
+    std::function<std::size_t()> other_bytes{};
   };
 
   struct Stats {
