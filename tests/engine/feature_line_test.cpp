@@ -137,20 +137,18 @@ void expect_same_line(const FeatureLineResult& a, const FeatureLineResult& b, co
 TEST(FeatureLine, PiecesSideBySideGiveTheSerialLine) {
   // Pieces are refined side by side and their crest localisation then meets the pins in line
   // order: every answer must be the one the pieces give one after another. Keys anywhere on the
-  // bunny (long pieces, second strips) and the dragon (strips that fold and are split), open and
-  // closed, 3-5 keys; five keys along a noisy ridge.
-  const auto bunny = prepare_mesh(read_mesh_file(require_shared_mesh("bunny_closed.off")));
+  // dragon (long pieces, strips that fold and are split), open and closed, 3-5
+  // keys; five keys along a noisy ridge.
   const auto dragon = prepare_mesh(read_mesh_file(require_shared_mesh("dragon_25k.off")));
   const auto ridge_field = make_ridge_field(81, 0.2, 3, 0.3, 0.25, 0.3);
   const auto ridge = prepare_mesh(with_noise(ridge_field.mesh, 0.1, 5));
   std::vector<std::pair<const PreparedMesh*, FeatureLineRequest>> lines;
-  for (const PreparedMesh* mesh : {bunny.get(), dragon.get()})
-    for (std::uint32_t i = 0; i < 8; ++i) {
-      FeatureLineRequest request;
-      for (std::uint32_t k = 0; k < 3 + i % 3; ++k) request.keys.push_back((i * 7919u + k * 104729u + 13u) % mesh->n_vertices());
-      request.closed = i % 4 == 3;
-      lines.emplace_back(mesh, request);
-    }
+  for (std::uint32_t i = 0; i < 12; ++i) {
+    FeatureLineRequest request;
+    for (std::uint32_t k = 0; k < 3 + i % 3; ++k) request.keys.push_back((i * 7919u + k * 104729u + 13u) % dragon->n_vertices());
+    request.closed = i % 4 == 3;
+    lines.emplace_back(dragon.get(), request);
+  }
   FeatureLineRequest along;
   for (double x : {-0.8, -0.4, 0.0, 0.4, 0.8}) along.keys.push_back(nearest_vertex(ridge_field.mesh, x, ridge_field.crest(x)));
   lines.emplace_back(ridge.get(), along);
@@ -171,7 +169,7 @@ TEST(FeatureLine, PiecesSideBySideGiveTheSerialLine) {
     ASSERT_TRUE(job.has_value());
     expect_same_line(expected, job->get(), "line " + std::to_string(l) + " from a job on the pool");
   }
-  EXPECT_GT(second_pieces, 10);  // the lines do have pieces to run side by side
+  EXPECT_GT(second_pieces, 8);  // the lines do have pieces to run side by side
   EXPECT_GT(splits, 0);          // and a fold split into halves inside one task
 }
 
