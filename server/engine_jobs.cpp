@@ -45,9 +45,13 @@ std::vector<FeatureLineResult> EngineJobs::run_lines(const std::shared_ptr<const
   std::vector<std::future<Timed>> futures;
   for (auto line : lines) {
     line.cancel = cancel.get();
-    line.executor = &pool_;  // idle engine threads help with its pieces; none are taken from queued jobs
-    futures.push_back(submit_or_503([session, line, cancel, queued = Clock::now()] {
+    futures.push_back(submit_or_503([session, line, cancel, &pool = pool_, queued = Clock::now()]() mutable {
       const double waited = std::chrono::duration<double, std::milli>(Clock::now() - queued).count();
+      // Pieces side by side only while engine threads are idle: run on two cores, a line costs
+      // about a tenth more CPU (bench_server lost 5-15% of its lines/s at 8-32 connections).
+      SerialExecutor one_thread;
+      const bool idle = pool.queue_depth() == 0 && pool.running() < pool.threads();
+      line.executor = idle ? static_cast<Executor*>(&pool) : &one_thread;
       return Timed{detect_feature_line(*session->mesh, line), waited};
     }));
   }
