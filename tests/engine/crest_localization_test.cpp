@@ -16,6 +16,23 @@ namespace {
 
 using namespace featureline::testing;
 
+// The arc-shaped crest of seed 2 on an n x n grid: a ridge (amplitude > 0) or a valley.
+CurvedCrestField seed_two_arc(int n, double amplitude) {
+  CurvedCrestOptions options;
+  options.n = n;
+  options.seed = 2;
+  options.amplitude = amplitude;
+  return make_curved_crest_field(options);
+}
+
+// The refined line from keys at the start, middle and end of the arc.
+std::vector<Eigen::Vector3d> line_along_arc(const CurvedCrestField& field) {
+  const auto mesh = prepare_mesh(field.field.mesh);
+  FeatureLineRequest request;
+  request.keys = keys_on_curved_crest(field, {0.0, 0.5, 1.0});
+  return refined_positions(detect_feature_line(*mesh, request));
+}
+
 TEST(CrestLocalization, ArcCrestIsNotCutInsideItsBend) {
   // A Gaussian ridge (and valley) across an arc whose radius of curvature is 3 crest widths, on
   // 24k and 80k triangles: the snake's elasticity and a fit that reads the bend as an offset both
@@ -26,17 +43,9 @@ TEST(CrestLocalization, ArcCrestIsNotCutInsideItsBend) {
   for (const int n : {111, 201})
     for (const double amplitude : {0.3, -0.3}) {
       SCOPED_TRACE("n " + std::to_string(n) + (amplitude > 0 ? " ridge" : " valley"));
-      CurvedCrestOptions options;
-      options.n = n;
-      options.seed = 2;
-      options.amplitude = amplitude;
-      const CurvedCrestField field = make_curved_crest_field(options);
-      const auto mesh = prepare_mesh(field.field.mesh);
+      const CurvedCrestField field = seed_two_arc(n, amplitude);
       const double e = mean_edge_length(field.field.mesh);
-      FeatureLineRequest request;
-      request.keys = keys_on_curved_crest(field, {0.0, 0.5, 1.0});
-      const auto result = detect_feature_line(*mesh, request);
-      const auto points = refined_positions(result);
+      const auto points = line_along_arc(field);
       const auto inward = arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.inward_offset(p.x(), p.y()) / e; });
       const auto distance = arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.distance(p.x(), p.y()) / e; });
       EXPECT_LT(std::abs(inward.mean), 0.03);
@@ -51,16 +60,9 @@ TEST(CrestLocalization, CleanCoarseArcKeepsItsLocalisedPieces) {
   // after the middle key 0.3 e off; kept, the whole line is within 0.15 e.
   for (const double amplitude : {0.3, -0.3}) {
     SCOPED_TRACE(amplitude > 0 ? "ridge" : "valley");
-    CurvedCrestOptions options;
-    options.n = 51;
-    options.seed = 2;
-    options.amplitude = amplitude;
-    const CurvedCrestField field = make_curved_crest_field(options);
-    const auto mesh = prepare_mesh(field.field.mesh);
+    const CurvedCrestField field = seed_two_arc(51, amplitude);
     const double e = mean_edge_length(field.field.mesh);
-    FeatureLineRequest request;
-    request.keys = keys_on_curved_crest(field, {0.0, 0.5, 1.0});
-    const auto points = refined_positions(detect_feature_line(*mesh, request));
+    const auto points = line_along_arc(field);
     const auto distance = arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.distance(p.x(), p.y()) / e; });
     EXPECT_LT(distance.max, 0.15);
     EXPECT_LT(distance.mean, 0.05);
