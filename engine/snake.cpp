@@ -1,13 +1,12 @@
 #include "engine/snake.h"
 
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 
 #include "engine/errors.h"
 #include "engine/internal/geometry.h"
 #include "engine/internal/order_statistics.h"
+#include "engine/internal/pentadiagonal.h"
 #include "engine/internal/snake_force.h"
 #include "engine/internal/strip_walk.h"
 
@@ -57,27 +56,22 @@ void spread_evenly(const FeatureStrip& strip, const FlatStrip& flat, std::vector
   points.swap(spread);
 }
 
-// (I + tau A) restricted to the interior points, A = alpha D1^T D1 + beta D2^T D2 built from the
-// energy sum alpha |v_{i+1} - v_i|^2 + beta |v_{i-1} - 2 v_i + v_{i+1}|^2 (Eqs. 5, 6, 12). Building A
-// from the energy gives the right rows next to the pinned ends: a truncated fourth difference
-// there would act as if v_{-1} = 0 and pull the line towards the origin.
-Eigen::SparseMatrix<double> stiffness(std::size_t n, double alpha, double beta) {
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(n * 9);
-  for (std::size_t i = 0; i + 1 < n; ++i) {  // first differences
-    const std::size_t j = i + 1;
-    triplets.emplace_back(i, i, alpha);
-    triplets.emplace_back(j, j, alpha);
-    triplets.emplace_back(i, j, -alpha);
-    triplets.emplace_back(j, i, -alpha);
+// A = alpha D1^T D1 + beta D2^T D2 over all n points, built from the energy sum
+// alpha |v_{i+1} - v_i|^2 + beta |v_{i-1} - 2 v_i + v_{i+1}|^2 (Eqs. 5, 6, 12). Building A from the
+// energy gives the right rows next to the pinned ends: a truncated fourth difference there would
+// act as if v_{-1} = 0 and pull the line towards the origin.
+SymmetricPentadiagonal stiffness(std::size_t n, double alpha, double beta) {
+  SymmetricPentadiagonal A;
+  A.assign_zero(n);
+  for (std::size_t i = 0; i + 1 < n; ++i) {  // first differences (-1, 1) at i, i+1
+    A.d0[i] += alpha, A.d0[i + 1] += alpha;
+    A.d1[i] -= alpha;
   }
   for (std::size_t i = 0; i + 2 < n; ++i) {  // second differences (1, -2, 1) at i, i+1, i+2
-    const double w[3] = {1, -2, 1};
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) triplets.emplace_back(i + r, i + c, beta * w[r] * w[c]);
+    A.d0[i] += beta, A.d0[i + 1] += 4 * beta, A.d0[i + 2] += beta;
+    A.d1[i] -= 2 * beta, A.d1[i + 1] -= 2 * beta;
+    A.d2[i] += beta;
   }
-  Eigen::SparseMatrix<double> A{Eigen::Index(n), Eigen::Index(n)};
-  A.setFromTriplets(triplets.begin(), triplets.end());
   return A;
 }
 
@@ -188,17 +182,14 @@ void resample(const SnakeRun& run, std::vector<StripPoint>& points, double dampi
   if (run.o.normal_step) spread_evenly(run.strip, run.flat, points, damping);
 }
 
-// The linear system of Eq. (15) and its buffers, kept across iterations: it is refactored only
-// when resampling changed the number of points. The matrices are stored whole (both triangles);
-// the solver reads the upper one, which Eigen factorises in place when there is no reordering
-// (from the lower one it would copy the matrix into upper storage before every factorisation).
+// The linear system of Eq. (15) and its buffers, kept across iterations: A is rebuilt only when
+// resampling changed the number of points.
 struct SnakeSystem {
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> solver;
-  Eigen::SparseMatrix<double> A, M;
-  /// A's block over the interior points: M's pattern, entry for entry (normal step).
-  Eigen::SparseMatrix<double> A_interior;
+  PentadiagonalLDLT solver;
+  SymmetricPentadiagonal A, M;
+  SymmetricPentadiagonal A_interior;  ///< A's block over the interior points
   std::vector<double> diagonal;  ///< 1 + tau K_ii per interior point (normal step)
-  std::size_t factored_size = 0;
+  std::size_t factored_size = 0;  ///< paper step: the point count M was factorised for
   Eigen::VectorXd x, y, rhs_x, rhs_y;  ///< positions v_k in units, right-hand sides
   std::vector<Eigen::Vector2d> normal;
 };
@@ -206,13 +197,9 @@ struct SnakeSystem {
 // Loads v_k (in units) and rebuilds A when the number of points changed.
 void load_positions(const SnakeRun& run, const std::vector<StripPoint>& points, SnakeSystem& sys) {
   const std::size_t n = points.size();
-  if (Eigen::Index(n) != sys.A.rows()) {
+  if (n != sys.A.size()) {
     sys.A = stiffness(n, run.o.alpha, run.o.beta);
-    if (n > 2) {
-      const auto m = Eigen::Index(n - 2);
-      sys.A_interior = sys.A.block(1, 1, m, m);
-      sys.M = sys.A_interior;
-    }
+    if (n > 2) sys.A_interior = sys.A.block(1, n - 2), sys.M = sys.A_interior;
   }
   sys.x.resize(Eigen::Index(n));
   sys.y.resize(Eigen::Index(n));
@@ -251,18 +238,16 @@ void assemble_normal_system(const SnakeRun& run, const std::vector<StripPoint>& 
       stiffness_i = std::max(0.0, -o.kappa * sys.normal[i].dot(run.force.jacobian[points[i].triangle] * sys.normal[i]));
     sys.diagonal[i - 1] = 1.0 + o.tau * stiffness_i;
   }
-  // M has A_interior's pattern (load_positions made it so when the point count changed): its
-  // values are written in place, entry for entry, instead of assembled and sorted every iteration.
-  const double* a = sys.A_interior.valuePtr();
-  double* values = sys.M.valuePtr();
-  const auto* outer = sys.M.outerIndexPtr();
-  const auto* inner = sys.M.innerIndexPtr();
-  for (Eigen::Index c = 0; c < Eigen::Index(m); ++c)
-    for (auto j = outer[c]; j < outer[c + 1]; ++j) {
-      const auto r = inner[j];
-      const double coupling = o.tau * a[j] * sys.normal[std::size_t(r) + 1].dot(sys.normal[std::size_t(c) + 1]);
-      values[j] = r == c ? sys.diagonal[std::size_t(r)] + coupling : coupling;
-    }
+  const SymmetricPentadiagonal& a = sys.A_interior;
+  // tau N'AN: entry (r, c) couples the moves of points r + 1 and c + 1 along their normals.
+  auto coupling = [&](double a_rc, std::size_t r, std::size_t c) {
+    return o.tau * a_rc * sys.normal[r + 1].dot(sys.normal[c + 1]);
+  };
+  for (std::size_t r = 0; r < m; ++r) {
+    sys.M.d0[r] = sys.diagonal[r] + coupling(a.d0[r], r, r);
+    if (r + 1 < m) sys.M.d1[r] = coupling(a.d1[r], r, r + 1);
+    if (r + 2 < m) sys.M.d2[r] = coupling(a.d2[r], r, r + 2);
+  }
 }
 
 // One normal step: each interior point's target, its solved move along its normal, damped and
@@ -272,11 +257,9 @@ void normal_step_targets(const SnakeRun& run, const std::vector<StripPoint>& poi
   const std::size_t n = points.size();
   chord_normals(sys, n);
   assemble_normal_system(run, points, sys);
-  if (n != sys.factored_size) sys.solver.analyzePattern(sys.M);
-  sys.factored_size = n;
-  sys.solver.factorize(sys.M);
-  if (sys.solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
-  const Eigen::VectorXd s = sys.solver.solve(sys.rhs_x);
+  if (!sys.solver.factorize(sys.M)) throw GeometryError("the snake system could not be factorised");
+  Eigen::VectorXd& s = sys.rhs_x;
+  sys.solver.solve_in_place(s);
   for (std::size_t i = 1; i + 1 < n; ++i) {
     const double move = std::clamp(damping * s[Eigen::Index(i - 1)], -run.o.max_step, run.o.max_step);
     targets[i] = Eigen::Vector2d(sys.x[Eigen::Index(i)], sys.y[Eigen::Index(i)]) + move * sys.normal[i];
@@ -301,11 +284,11 @@ Eigen::Vector2d paper_force_step(const SnakeRun& run, const std::vector<StripPoi
 // Factors (I + tau A) restricted to the interior points, when the number of points changed.
 void factor_paper_system(const SnakeRun& run, std::size_t n, SnakeSystem& sys) {
   if (n == sys.factored_size) return;
-  const Eigen::Index m = Eigen::Index(n - 2);
-  Eigen::SparseMatrix<double> Mi = sys.A.block(1, 1, m, m) * run.o.tau;
-  for (Eigen::Index i = 0; i < m; ++i) Mi.coeffRef(i, i) += 1.0;
-  sys.solver.compute(Mi);
-  if (sys.solver.info() != Eigen::Success) throw GeometryError("the snake system could not be factorised");
+  SymmetricPentadiagonal Mi = sys.A_interior;
+  for (auto* diagonal : {&Mi.d0, &Mi.d1, &Mi.d2})
+    for (double& value : *diagonal) value *= run.o.tau;
+  for (double& value : Mi.d0) value += 1.0;
+  if (!sys.solver.factorize(Mi)) throw GeometryError("the snake system could not be factorised");
   sys.factored_size = n;
 }
 
@@ -329,7 +312,9 @@ void paper_step_targets(const SnakeRun& run, const std::vector<StripPoint>& poin
     sys.rhs_x[r] = sys.x[at] + step.x() - run.o.tau * coupling_x[at];
     sys.rhs_y[r] = sys.y[at] + step.y() - run.o.tau * coupling_y[at];
   }
-  const Eigen::VectorXd new_x = sys.solver.solve(sys.rhs_x), new_y = sys.solver.solve(sys.rhs_y);
+  sys.solver.solve_in_place(sys.rhs_x);
+  sys.solver.solve_in_place(sys.rhs_y);
+  const Eigen::VectorXd &new_x = sys.rhs_x, &new_y = sys.rhs_y;
   for (std::size_t i = 1; i + 1 < n; ++i) {
     const Eigen::Vector2d target(new_x[Eigen::Index(i - 1)], new_y[Eigen::Index(i - 1)]);
     const Eigen::Vector2d now(sys.x[Eigen::Index(i)], sys.y[Eigen::Index(i)]);

@@ -5,7 +5,11 @@
 #include <random>
 #include <set>
 
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+
 #include "engine/feature_line.h"
+#include "engine/internal/pentadiagonal.h"
 #include "tests/support/line_metrics.h"
 #include "tests/support/synthetic_meshes.h"
 
@@ -75,6 +79,89 @@ TEST_P(RidgeRefinement, RefinedLineIsCloserAndSmootherThanInitialAndGeodesic) {
 }
 
 INSTANTIATE_TEST_SUITE_P(RidgeAndValley, RidgeRefinement, ::testing::Values(0.3, -0.3));
+
+// The snake's system: the identity plus tau times a pentadiagonal stiffness with random weights
+// (positive definite), as a band and as a dense matrix.
+struct BandAndDense {
+  SymmetricPentadiagonal band;
+  Eigen::MatrixXd dense;
+};
+BandAndDense snake_like_system(std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> weight(0.0, 20.0);
+  BandAndDense m{{}, Eigen::MatrixXd::Identity(Eigen::Index(n), Eigen::Index(n))};
+  for (std::size_t i = 0; i + 2 < n; ++i) {  // w |v_i - 2 v_{i+1} + v_{i+2}|^2
+    const double w = weight(rng), c[3] = {1, -2, 1};
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) m.dense(Eigen::Index(i) + r, Eigen::Index(i) + k) += w * c[r] * c[k];
+  }
+  m.band.assign_zero(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto r = Eigen::Index(i);
+    m.band.d0[i] = m.dense(r, r);
+    if (i + 1 < n) m.band.d1[i] = m.dense(r, r + 1);
+    if (i + 2 < n) m.band.d2[i] = m.dense(r, r + 2);
+  }
+  return m;
+}
+
+TEST(Pentadiagonal, ProductAndSolveMatchTheDenseMatrix) {
+  for (const std::size_t n : {1u, 2u, 3u, 7u, 200u}) {
+    const BandAndDense m = snake_like_system(n, n);
+    const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(Eigen::Index(n), -1.0, 2.0);
+    EXPECT_LT((m.band * x - m.dense * x).norm(), 1e-12 * (m.dense * x).norm()) << n << " points";
+    PentadiagonalLDLT ldlt;
+    ASSERT_TRUE(ldlt.factorize(m.band)) << n << " points";
+    Eigen::VectorXd solved = m.dense * x;
+    ldlt.solve_in_place(solved);
+    EXPECT_LT((solved - x).norm(), 1e-9 * x.norm()) << n << " points";
+  }
+}
+
+// The snake's lines were computed with Eigen's simplicial LDL^T; the band solver does its
+// operations in its order, so the lines stay the same to the last bit.
+TEST(Pentadiagonal, SolvesAsEigensSimplicialLDLTToTheLastBit) {
+  const std::size_t n = 150;
+  const BandAndDense m = snake_like_system(n, 11);
+  const Eigen::SparseMatrix<double> sparse = m.dense.sparseView();
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> eigen(sparse);
+  ASSERT_EQ(eigen.info(), Eigen::Success);
+  PentadiagonalLDLT band;
+  ASSERT_TRUE(band.factorize(m.band));
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> value(-3.0, 3.0);
+  Eigen::VectorXd b(Eigen::Index(n), 1);
+  for (auto& v : b) v = value(rng);
+  const Eigen::VectorXd expected = eigen.solve(b);
+  Eigen::VectorXd solved = b;
+  band.solve_in_place(solved);
+  for (Eigen::Index i = 0; i < Eigen::Index(n); ++i) EXPECT_EQ(solved[i], expected[i]) << "row " << i;
+  const Eigen::VectorXd product = sparse * b;
+  const Eigen::VectorXd banded = m.band * b;
+  for (Eigen::Index i = 0; i < Eigen::Index(n); ++i) EXPECT_EQ(banded[i], product[i]) << "row " << i;
+}
+
+TEST(Pentadiagonal, BlockIsTheInteriorOfTheMatrix) {
+  const BandAndDense m = snake_like_system(9, 3);
+  const SymmetricPentadiagonal inner = m.band.block(1, 7);
+  ASSERT_EQ(inner.size(), 7u);
+  for (Eigen::Index r = 0; r < 7; ++r)
+    for (Eigen::Index c = r; c < std::min<Eigen::Index>(7, r + 3); ++c) {
+      const double banded = c == r ? inner.d0[r] : c == r + 1 ? inner.d1[r] : inner.d2[r];
+      EXPECT_EQ(banded, m.dense(r + 1, c + 1)) << r << ", " << c;
+    }
+}
+
+TEST(Pentadiagonal, RefusesAMatrixThatIsNotPositiveDefinite) {
+  SymmetricPentadiagonal m;
+  m.assign_zero(4);
+  m.d0 = {1, 1, 1, 1};
+  m.d2 = {2, 0};  // rows 0 and 2: [[1, 2], [2, 1]] has eigenvalue -1
+  PentadiagonalLDLT ldlt;
+  EXPECT_FALSE(ldlt.factorize(m));
+  m.d0[0] = std::nan("");
+  EXPECT_FALSE(ldlt.factorize(m));
+}
 
 TEST(Snake, StraightLineWithoutForceStaysPut) {
   // On a plane there is no curvature, so no force: a straight line far from the origin must
