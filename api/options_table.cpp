@@ -314,8 +314,8 @@ const OptionTable<CurvatureOptions>& curvature_option_table() {
                 "the paper's one-ring mean curvature", "--curvature", &O::method),
       option<O>("radius", within(CurvatureLimits::radius_range), "Jet radius in local edge lengths (0: from the noise)",
                 "--curvature-radius", &O::radius),
-      option<O>("jet_degree", {}, "Jet polynomial: quadric, cubic (its odd terms take up a crest's bend over wide "
-                "radii), or auto: cubic above a radius of 3 local edge lengths", "--jet-degree", &O::jet_degree),
+      option<O>("jet_degree", {}, "Jet polynomial: quadric, cubic (its odd terms take up a crest's bend), or auto: "
+                "cubic, quadric at the border and beside creases", "--jet-degree", &O::jet_degree),
       option<O>("smoothing_passes", within(CurvatureLimits::smoothing_passes_range), "Laplacian passes over the "
                 "curvature field (-1: while they cut its roughness)", "--smooth-curvature", &O::smoothing_passes),
       option<O>("crease_angle", within(CurvatureLimits::crease_angle_range, -1), "Dihedral angle in degrees above which an "

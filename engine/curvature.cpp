@@ -505,9 +505,7 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
     // radius^-6 at a fixed density) but blur features; grow the radius with the noise only.
     field.radius = options.radius > 0 ? options.radius : std::clamp(2 + 100 * field.noise, kProbeRadius, 6.0);
     // The probe's quadrics serve as the field itself when they are what was asked for.
-    field.jet_degree = options.jet_degree != JetDegree::automatic ? options.jet_degree
-                       : field.radius > CurvatureLimits::cubic_jet_above ? JetDegree::cubic
-                                                                          : JetDegree::quadric;
+    field.jet_degree = options.jet_degree != JetDegree::automatic ? options.jet_degree : JetDegree::cubic;
     if (field.radius != kProbeRadius || stride != 1 || field.jet_degree != JetDegree::quadric)
       fit_all(positions, normals, adjacency, on_crease, mesh.boundary_vertex, local, field.radius, 1, field.mean, field,
               cancel, executor,

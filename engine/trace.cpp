@@ -514,13 +514,18 @@ std::optional<Eigen::Vector3d> crest_axis(const PreparedMesh& mesh, std::uint32_
   return std::nullopt;
 }
 
+// On an exact surface the noise floor is nearly zero (a CAD part's noise estimate is 1e-5 edge
+// lengths), and the jets' own error on a flat face reads as curvature: 2-5e-5 of the curvature
+// scale beside fandisk's creases. Under this share of the scale a seed has no feature to follow.
+constexpr double kMinSeedStrength = 1e-3;
+
 // A smooth seed's two walks go both ways along its crest; a seed without a crest (the field
 // below the noise floor, or not falling across) has no feature to follow.
 void start_on_crest(const PreparedMesh& mesh, const Seed& seed, const Tracer& tracer, const TraceOptions& options,
                     Walk& forward, Walk& backward) {
   const auto at = "vertex " + std::to_string(seed.vertex);
   const double strength = tracer.seed_value() / mesh.curvature_scale();
-  if (!(tracer.seed_value() > 0) || tracer.seed_value() < tracer.floor_at(seed.vertex))
+  if (!(tracer.seed_value() > 0) || tracer.seed_value() < tracer.floor_at(seed.vertex) || strength < kMinSeedStrength)
     throw GeometryError("no ridge, valley or crease to trace at " + at + ": its feature strength " + format_number(strength) +
                         " is within the noise");
   const std::optional<Eigen::Vector3d> axis = crest_axis(mesh, seed.vertex, sign_value(seed.sign), options.step);

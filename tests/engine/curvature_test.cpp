@@ -128,17 +128,19 @@ TEST(Curvature, CubicJetsKeepABentCrestOnItsCurve) {
   EXPECT_LT(std::abs(by_cubic), 0.25 * by_quadric) << "quadric " << by_quadric;
 }
 
-// Automatic: cubics over radii above CurvatureLimits::cubic_jet_above, quadrics below; the
-// field says which it fitted.
-TEST(Curvature, AutomaticJetDegreeFollowsTheRadius) {
+// Automatic: cubics at every radius; the field says which it fitted.
+TEST(Curvature, AutomaticJetsAreCubicAtEveryRadius) {
   CurvedCrestOptions options;
   options.n = 31;
   const RawMesh mesh = make_curved_crest_field(options).field.mesh;
-  for (const auto& [radius, expected] : {std::pair{2.0, JetDegree::quadric}, {3.0, JetDegree::quadric}, {4.0, JetDegree::cubic}}) {
+  for (const double radius : {2.0, 3.0, 4.0}) {
     PrepareOptions prepare;
     prepare.curvature.radius = radius;
-    EXPECT_EQ(prepare_mesh(mesh, prepare)->curvature().jet_degree, expected) << "radius " << radius;
+    EXPECT_EQ(prepare_mesh(mesh, prepare)->curvature().jet_degree, JetDegree::cubic) << "radius " << radius;
   }
+  PrepareOptions quadric;
+  quadric.curvature.jet_degree = JetDegree::quadric;
+  EXPECT_EQ(prepare_mesh(mesh, quadric)->curvature().jet_degree, JetDegree::quadric);
 }
 
 TEST(PrepareMesh, StatisticsOfKnownShapes) {
