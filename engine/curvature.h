@@ -62,9 +62,10 @@ struct CurvatureOptions {
   /// 0 chooses it from the estimated noise: 2 on clean meshes, growing to 6 at heavy noise.
   double radius = 0;
   /// Laplacian passes over the principal curvatures afterwards; each replaces a value by the
-  /// mean of itself and its neighbours' mean. -1 chooses them: doubling runs of passes for as
-  /// long as a run cuts the field's relative roughness to `smoothing_tolerance` or less (noise
-  /// keeps falling, a smooth field's own variation does not), at most the limit.
+  /// mean of itself and its neighbours' mean. -1 chooses them: none on an exact surface (estimated
+  /// noise below 0.005 local edge lengths), else doubling runs of passes for as long as a run
+  /// cuts the field's relative roughness to `smoothing_tolerance` or less (noise keeps falling,
+  /// a smooth field's own variation does not), at most the limit.
   int smoothing_passes = -1;
   double smoothing_tolerance = 0.85;
   /// An edge whose faces' normals differ by more than this many degrees is a crease. 0 chooses
