@@ -191,6 +191,7 @@ struct SnakeSystem {
   std::vector<double> diagonal;  ///< 1 + tau K_ii per interior point (normal step)
   std::size_t factored_size = 0;  ///< paper step: the point count M was factorised for
   Eigen::VectorXd x, y, rhs_x, rhs_y;  ///< positions v_k in units, right-hand sides
+  Eigen::VectorXd ax, ay;              ///< A v_k (normal step)
   std::vector<Eigen::Vector2d> normal;
 };
 
@@ -226,7 +227,9 @@ void chord_normals(SnakeSystem& sys, std::size_t n) {
 void assemble_normal_system(const SnakeRun& run, const std::vector<StripPoint>& points, SnakeSystem& sys) {
   const SnakeOptions& o = run.o;
   const std::size_t n = points.size(), m = n - 2;
-  const Eigen::VectorXd ax = sys.A * sys.x, ay = sys.A * sys.y;
+  sys.A.multiply(sys.x, sys.ax);
+  sys.A.multiply(sys.y, sys.ay);
+  const Eigen::VectorXd &ax = sys.ax, &ay = sys.ay;
   sys.rhs_x.resize(Eigen::Index(m));
   sys.diagonal.resize(m);
   for (std::size_t i = 1; i + 1 < n; ++i) {

@@ -26,10 +26,11 @@ struct SymmetricPentadiagonal {
     d1.assign(n > 0 ? n - 1 : 0, 0.0);
     d2.assign(n > 1 ? n - 2 : 0, 0.0);
   }
-  /// M x, for x of size() entries (summed in column order, as Eigen's sparse product does).
-  Eigen::VectorXd operator*(const Eigen::VectorXd& x) const {
+  /// y = M x, for x of size() entries, summed in column order as Eigen's sparse product does
+  /// (y is resized, so a buffer kept across calls is not reallocated).
+  void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
     const std::size_t n = size();
-    Eigen::VectorXd y(Eigen::Index(n), 1);
+    y.resize(Eigen::Index(n));
     for (std::size_t i = 0; i < n; ++i) {
       double sum = 0;
       if (i >= 2) sum += d2[i - 2] * x[Eigen::Index(i - 2)];
@@ -39,6 +40,10 @@ struct SymmetricPentadiagonal {
       if (i + 2 < n) sum += d2[i] * x[Eigen::Index(i + 2)];
       y[Eigen::Index(i)] = sum;
     }
+  }
+  Eigen::VectorXd operator*(const Eigen::VectorXd& x) const {
+    Eigen::VectorXd y;
+    multiply(x, y);
     return y;
   }
   /// The block of rows and columns [first, first + count).
