@@ -198,8 +198,8 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "around the vertices nearest that line (the stronger line kept)", "--one-strip", &O::second_strip),
       option<O>("crest.enabled", {}, "Place the snake's line on the crest of the feature field across it, located "
                 "inside triangles (false: the snake's line as it settles, the paper's)", "--no-crest", &O::crest, &CrestOptions::enabled),
-      option<O>("crest.radius", within(CrestOptions::radius_range), "Crest localisation: smallest fit radius (strip edge "
-                "lengths); the fit grows to the crest's half width", "", &O::crest, &CrestOptions::radius),
+      option<O>("crest.radius", within(CrestOptions::radius_range), "Crest localisation: radius of the fits measuring the "
+                "crest's half width (strip edge lengths), which the fit then takes, down to the jet radius", "", &O::crest, &CrestOptions::radius),
       option<O>("crest.max_radius", within(CrestOptions::radius_range), "Crest localisation: largest fit radius (strip edge "
                 "lengths; also within the strip's rings)", "", &O::crest, &CrestOptions::max_radius),
       option<O>("crest.max_shift", within(CrestOptions::max_shift_range), "Crest localisation: largest move of a point "
