@@ -317,7 +317,7 @@ const OptionTable<CurvatureOptions>& curvature_option_table() {
       option<O>("jet_degree", {}, "Jet polynomial: quadric, cubic (its odd terms take up a crest's bend), or auto: "
                 "cubic, quadric at the border and beside creases", "--jet-degree", &O::jet_degree),
       option<O>("smoothing_passes", within(CurvatureLimits::smoothing_passes_range), "Laplacian passes over the "
-                "curvature field (-1: while they cut its roughness)", "--smooth-curvature", &O::smoothing_passes),
+                "curvature field (-1: none on an exact surface, else while they cut its roughness)", "--smooth-curvature", &O::smoothing_passes),
       option<O>("crease_angle", within(CurvatureLimits::crease_angle_range, -1), "Dihedral angle in degrees above which an "
                 "edge is a crease (0: from the noise, -1: no creases)", "--crease-angle", &O::crease_angle),
       option<O>("smoothing_tolerance", within(CurvatureLimits::smoothing_tolerance_range, 0.01, 0.99), "Automatic smoothing goes on while a run of passes leaves at "
