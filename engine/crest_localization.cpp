@@ -125,6 +125,15 @@ struct CrestFit {
 // 0.071-0.074, 0.02-0.03 nearer on curved crests).
 constexpr double kBendFrameMaxNoise = 0.09;
 
+// A strip narrower than the jets (a few rings on a coarse noisy mesh, whose jets span 5-6 edges)
+// is fitted across its whole width when that is at least this many edges, rather than left to
+// the snake, whose line sits inside bends: bench_accuracy's 5,000-24,200-triangle cells at 10-20%
+// noise came nearer in 22 of 24 (arc valley 5,000 at 10%: 0.113 -> 0.049 grid spacings; valley
+// 24,200 at 20%: 0.124 -> 0.090), two further (arc ridge 24,200 at 20%: 0.097 -> 0.102). Not at
+// kBendFrameMaxNoise and above: at 30% such fits moved cells both ways (0.146 -> 0.095, 0.116 ->
+// 0.142).
+constexpr double kNarrowestStripFit = 3;
+
 // A crest is where the field falls off across the line by at least this share of its peak
 // within the fit radius; flatter fields (a cylinder's circle, a plane) have no crest to find.
 constexpr double kMinCrestDrop = 0.02;
@@ -253,17 +262,22 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
   // The strip reaches `rings` edges from its line: a narrower strip than the smallest fit would
   // leave the fit extrapolating (a 5-edge piece on 2 rings of a noisy part was moved off).
   const double largest = std::min(o.max_radius, double(strip.rings)) * h;
-  // Never finer than the jet fits the field came from: on a noisy mesh their radius grows with
-  // the noise, and a shorter fit across the line follows the noise they left.
+  // Never finer than the jet fits the field came from where the strip allows: on a noisy mesh
+  // their radius grows with the noise, and a shorter fit across the line follows the noise they
+  // left. A narrower strip is fitted across its whole width (kNarrowestStripFit).
   const double smallest = std::max(o.radius, mesh.curvature().radius) * h;
-  if (largest < smallest) return result;
-  // The half width is measured at `smallest`, the fit may then be as narrow as the jets: where a
-  // clean crest's peak is narrower than `smallest`, a wider fit reads a bend as an offset into it
+  double measuring = smallest;
+  if (largest < smallest) {
+    if (!(largest >= kNarrowestStripFit * h && mesh.curvature().noise < kBendFrameMaxNoise)) return result;
+    measuring = largest;
+  }
+  // The half width is measured at `measuring`, the fit may then be as narrow as the jets: where a
+  // clean crest's peak is narrower than that, a wider fit reads a bend as an offset into it
   // (bench_accuracy's 5,000-triangle sines: 0.054 grid spacings off at 3 edges, 0.025 at the jets'
-  // 2.2). Without jets (the cotangent field) `smallest` stays the floor.
+  // 2.2). Without jets (the cotangent field) `measuring` stays the floor.
   const double jets = mesh.curvature().radius;
-  const double lowest = jets > 0 ? std::min(smallest, jets * h) : smallest;
-  const double radius = line_fit_radius(flat, field, on_crease, crease_reach, points, smallest, largest, lowest);
+  const double lowest = jets > 0 ? std::min(measuring, jets * h) : measuring;
+  const double radius = line_fit_radius(flat, field, on_crease, crease_reach, points, measuring, largest, lowest);
   const std::size_t n = points.size();
   std::vector<double> offsets(n, std::nan(""));
   std::vector<Eigen::Vector2d> normals(n);
