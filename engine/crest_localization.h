@@ -27,7 +27,7 @@ struct CrestOptions {
   /// Fit neighbourhood radius, in the strip's mean edge lengths: the crest's half width as fits
   /// at max(radius, the jet radius) measure it, within [the jet radius, max_radius] (and within
   /// the strip); without jets (the cotangent field) within [radius, max_radius]. A strip narrower
-  /// than that is fitted across its whole width below 0.09 estimated noise (if 3 edges or more).
+  /// than that is fitted across its whole width at estimated noise 0.03-0.09 (if 3 edges or more).
   double radius = 3.0;
   double max_radius = 8.0;
   double max_shift = 0.5;   ///< largest move of a point across the line, in the strip's mean edge lengths
