@@ -33,6 +33,17 @@ std::vector<Eigen::Vector3d> line_along_arc(const CurvedCrestField& field) {
   return refined_positions(detect_feature_line(*mesh, request));
 }
 
+// The refined line along the curved crest (line_along_arc), its offset into the bend and its
+// distance from the crest along its length, in units of e.
+struct CrestLineOffsets {
+  LineDistance inward, distance;
+};
+CrestLineOffsets offsets_along_crest(const CurvedCrestField& field, double e) {
+  const auto points = line_along_arc(field);
+  return {arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.inward_offset(p.x(), p.y()) / e; }),
+          arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.distance(p.x(), p.y()) / e; })};
+}
+
 TEST(CrestLocalization, ArcCrestIsNotCutInsideItsBend) {
   // A Gaussian ridge (and valley) across an arc whose radius of curvature is 3 crest widths, on
   // 5k, 24k and 80k triangles: the snake's elasticity and a fit that reads the bend as an offset
@@ -45,9 +56,7 @@ TEST(CrestLocalization, ArcCrestIsNotCutInsideItsBend) {
       SCOPED_TRACE("n " + std::to_string(n) + (amplitude > 0 ? " ridge" : " valley"));
       const CurvedCrestField field = seed_two_arc(n, amplitude);
       const double e = mean_edge_length(field.field.mesh);
-      const auto points = line_along_arc(field);
-      const auto inward = arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.inward_offset(p.x(), p.y()) / e; });
-      const auto distance = arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.distance(p.x(), p.y()) / e; });
+      const auto [inward, distance] = offsets_along_crest(field, e);
       EXPECT_LT(std::abs(inward.mean), 0.03);
       EXPECT_LT(distance.mean, 0.05);
     }
@@ -67,9 +76,7 @@ TEST(CrestLocalization, CleanCoarseSinesAreNotCutInsideTheirBends) {
       options.amplitude = amplitude;
       const CurvedCrestField field = make_curved_crest_field(options);
       const double e = mean_edge_length(field.field.mesh);
-      const auto points = line_along_arc(field);
-      const auto inward = arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.inward_offset(p.x(), p.y()) / e; });
-      const auto distance = arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.distance(p.x(), p.y()) / e; });
+      const auto [inward, distance] = offsets_along_crest(field, e);
       EXPECT_LT(std::abs(inward.mean), 0.03);
       EXPECT_LT(distance.mean, 0.03);
     }
@@ -84,9 +91,7 @@ TEST(CrestLocalization, NoisyCoarseArcIsLocalisedAcrossItsNarrowStrip) {
     CurvedCrestField field = seed_two_arc(51, amplitude);
     const double e = mean_edge_length(field.field.mesh);
     field.field.mesh = with_noise(field.field.mesh, 0.1 * field.field.spacing / e, 1);
-    const auto points = line_along_arc(field);
-    const auto inward = arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.inward_offset(p.x(), p.y()) / e; });
-    const auto distance = arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.distance(p.x(), p.y()) / e; });
+    const auto [inward, distance] = offsets_along_crest(field, e);
     EXPECT_LT(inward.mean, 0.05);
     EXPECT_LT(distance.mean, 0.06);
   }
