@@ -65,15 +65,31 @@ void gather(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, con
   }
 }
 
-// The monomials of a jet in (u, w) up to its degree: Terms 6 (quadric) or 10 (cubic).
-template <int Terms>
-Eigen::Matrix<double, Terms, 1> jet_monomials(double u, double w) {
-  // Set coefficient by coefficient: perf put a sixth of the fit's samples on Eigen's comma initializer.
-  Eigen::Matrix<double, Terms, 1> row;
-  row[0] = 1, row[1] = u, row[2] = w, row[3] = u * u, row[4] = u * w, row[5] = w * w;
-  if constexpr (Terms == 10) row[6] = u * u * u, row[7] = u * u * w, row[8] = u * w * w, row[9] = w * w * w;
-  return row;
-}
+// The exponents (a, b) of a jet's monomials u^a w^b: the quadric's first 6, then the cubic's.
+constexpr int kJetExponents[10][2] = {{0, 0}, {1, 0}, {0, 1}, {2, 0}, {1, 1}, {0, 2}, {3, 0}, {2, 1}, {1, 2}, {0, 3}};
+
+// The weighted moments of a neighbourhood, sum w u^a w^b (a + b <= 2 Degree) and sum w h u^a w^b
+// (a + b <= Degree): the normal equations' entries depend only on their monomials' exponent
+// sums, so each distinct one is accumulated once (28 products a point for a cubic instead of the
+// outer product's 100; the jet fits were half of a scan's preparation).
+template <int Degree>
+struct JetMoments {
+  static constexpr int kPowers = 2 * Degree + 1;
+  double m[kPowers][kPowers] = {};
+  double mh[Degree + 1][Degree + 1] = {};
+  double hh = 0;  ///< sum w h^2
+
+  void add(double u, double w, double h, double weight) {
+    double pu[kPowers], pw[kPowers];
+    pu[0] = weight, pw[0] = 1;
+    for (int k = 1; k < kPowers; ++k) pu[k] = pu[k - 1] * u, pw[k] = pw[k - 1] * w;
+    for (int a = 0; a < kPowers; ++a)
+      for (int b = 0; a + b < kPowers; ++b) m[a][b] += pu[a] * pw[b];
+    for (int a = 0; a <= Degree; ++a)
+      for (int b = 0; a + b <= Degree; ++b) mh[a][b] += h * pu[a] * pw[b];
+    hh += weight * h * h;
+  }
+};
 
 // Weighted least-squares fit of the height h = c0 + c1 u + c2 w + c3 u^2 + c4 uw + c5 w^2 (+ the
 // cubic's c6 u^3 + c7 u^2 w + c8 u w^2 + c9 w^3) over the neighbourhood, in a frame whose z axis
@@ -100,19 +116,20 @@ JetFit fit_jet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::V
   if (!(n.norm() > 1e-12)) return fit;
   n.normalize();
   const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
-  Eigen::Matrix<double, Terms, Terms> A = Eigen::Matrix<double, Terms, Terms>::Zero();
-  Eigen::Matrix<double, Terms, 1> b = Eigen::Matrix<double, Terms, 1>::Zero();
-  double weight_sum = 0, hh = 0;
+  constexpr int degree = Terms == 10 ? 3 : 2;
+  JetMoments<degree> moments;
   for (std::size_t i = 0; i < hood.size(); ++i) {
     const Eigen::Vector3d x = (P[hood[i]] - P[v]) * inv_r;
-    const double h = x.dot(n);
-    const double weight = weights[i];
-    const Eigen::Matrix<double, Terms, 1> row = jet_monomials<Terms>(x.dot(t1), x.dot(t2));
-    A.noalias() += (weight * row) * row.transpose();
-    b += weight * h * row;
-    weight_sum += weight;
-    hh += weight * h * h;
+    moments.add(x.dot(t1), x.dot(t2), x.dot(n), weights[i]);
   }
+  Eigen::Matrix<double, Terms, Terms> A;
+  Eigen::Matrix<double, Terms, 1> b;
+  for (int i = 0; i < Terms; ++i) {
+    const int* ei = kJetExponents[i];
+    b[i] = moments.mh[ei[0]][ei[1]];
+    for (int j = 0; j < Terms; ++j) A(i, j) = moments.m[ei[0] + kJetExponents[j][0]][ei[1] + kJetExponents[j][1]];
+  }
+  const double weight_sum = moments.m[0][0], hh = moments.hh;
   if (Terms == 10 && std::hypot(A(1, 0), A(2, 0)) > kLopsidedCentroid * A(0, 0)) {
     fit.lopsided = true;
     return fit;
