@@ -236,6 +236,36 @@ std::vector<double> smooth_offsets(const std::vector<double>& offsets, int passe
   return value;
 }
 
+// The field's blur moves a bent crest into its bend. Smoothing a field f whose crest runs along a
+// circle of radius R with a kernel of variance sigma^2 per axis gives f + sigma^2 / 2 Lap f to first
+// order; across the crest Lap f = f'' + f' / R, so the smoothed field peaks sigma^2 / (2 R) inside
+// the bend, whatever the crest's profile. The field's blur is that of its jets (a weighted
+// polynomial fit's second derivatives are the surface's blurred by kJetBlur r^2 per axis for
+// Gaussian weights of sigma r / 2 over a disc of radius r: numerically, quadric and cubic alike)
+// and of its smoothing passes (each averages a vertex half with its neighbours' mean: a quarter of
+// their mean squared distance per axis).
+constexpr double kJetBlur = 0.109;
+
+// The field's blur variance per axis (squared strip units) on a strip of mean edge length h and
+// mean squared edge length h2.
+double field_blur_variance(const CurvatureField& field, double h, double h2) {
+  return kJetBlur * field.radius * field.radius * h * h + 0.25 * field.smoothing_passes * h2;
+}
+
+// The blur is taken out (CrestOptions::unblur) on meshes whose estimated noise (local edge
+// lengths) lies from kNarrowStripMinNoise to this: smoothed fields of noisy meshes, where the blur
+// is several edges wide (bench_accuracy's fields at 10% noise read 0.036-0.037). At 20% (0.071-
+// 0.074) the line's bend over three fit radii follows its wander as much as the crest's, and the
+// correction moved curved cells both ways (24,200-triangle sine ridge 0.098 -> 0.138 grid
+// spacings, 245,000-triangle arc ridge 0.151 -> 0.204). On clean meshes the blur is the radius-2
+// jets' (sigma about 0.66 edges, a shift under 0.02 edges in these bends).
+constexpr double kUnblurMaxNoise = 0.05;
+// The blur's width (sigma) times the line's curvature up to which the first-order shift is
+// applied. Beyond it, on the 5,000-triangle arcs (0.13-0.14), the lines lay nearer than the
+// shift predicts (0.02-0.05 grid spacings inside the bend, not 0.15) and the correction put
+// them further off on the other side.
+constexpr double kUnblurMaxBend = 0.1;
+
 }  // namespace
 
 void check_crest_options(const CrestOptions& o) {
@@ -272,8 +302,8 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
   const double smallest = std::max(o.radius, mesh.curvature().radius) * h;
   double measuring = smallest;
   const bool narrow = largest < smallest;
+  const double noise = mesh.curvature().noise;
   if (narrow) {
-    const double noise = mesh.curvature().noise;
     if (!(largest >= kNarrowestStripFit * h && noise >= kNarrowStripMinNoise && noise < kBendFrameMaxNoise)) return result;
     measuring = largest;
   }
@@ -318,7 +348,16 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
     else continue;
     if (end) moves[i == 0 ? 0 : 1] = std::abs(s) <= reach;
   }
-  const std::vector<double> smoothed = smooth_offsets(offsets, o.smoothing_passes);
+  std::vector<double> smoothed = smooth_offsets(offsets, o.smoothing_passes);
+  if (o.unblur && noise >= kNarrowStripMinNoise && noise < kUnblurMaxNoise) {
+    const double variance = field_blur_variance(mesh.curvature(), h, strip.mean_squared_edge_length);
+    const std::vector<double> line_bend = bent_frame ? bends : line_bends(points, normals, 3 * radius);
+    for (std::size_t i = 0; i < n; ++i) {
+      const bool end = i == 0 || i + 1 == n;
+      if ((end && !moves[i == 0 ? 0 : 1]) || (!end && !std::isfinite(offsets[i]) && smoothed[i] == 0)) continue;
+      if (std::sqrt(variance) * std::abs(line_bend[i]) <= kUnblurMaxBend) smoothed[i] -= 0.5 * variance * line_bend[i];
+    }
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const bool end = i == 0 || i + 1 == n;
     if (end && !moves[i == 0 ? 0 : 1]) continue;

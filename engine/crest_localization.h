@@ -45,6 +45,14 @@ struct CrestOptions {
   /// lengths (noisier, the line's bend follows its wander more than the crest's). false: from
   /// its tangent.
   bool follow_bend = true;
+  /// Takes the field's blur out of bends. The jets and smoothing passes that make the field blur
+  /// it, which moves the crest of a bent feature into its bend by sigma^2 / (2 R) (sigma^2: the
+  /// blur's variance per axis, R: the bend's radius); each point then moves that far out of the
+  /// line's bend, on meshes whose estimated noise is 0.03-0.05 local edge lengths and where the
+  /// bend is gentle against the blur (sigma / R at most 0.1). Off by default: it takes arcs at
+  /// 24k-245k triangles and sines at 245k nearly all the way to the crest at 10% noise, but puts
+  /// sines on 5k-24k triangles a little further off (accuracy.md).
+  bool unblur = false;
 
   static constexpr ValidRange radius_range = closed_range(1, 12);
   static constexpr ValidRange max_shift_range = closed_range(0, 2);

@@ -136,7 +136,7 @@ FeatureStrip extract_feature_strip(const PreparedMesh& pm, const std::vector<std
       if (!local_face.contains(f)) local_face.set(f, 0), faces.push_back(f);
   }
   std::sort(faces.begin(), faces.end());  // the strip's triangles in mesh order, as always
-  double edge_sum = 0;
+  double edge_sum = 0, edge_sum2 = 0;
   for (auto f : faces) {
     const auto& t = pm.triangles()[f];
     std::array<std::uint32_t, 3> corners{};
@@ -148,10 +148,15 @@ FeatureStrip extract_feature_strip(const PreparedMesh& pm, const std::vector<std
     if (!inside) continue;
     strip.triangles.push_back(corners);
     strip.faces.push_back(f);
-    for (int k = 0; k < 3; ++k) edge_sum += (pm.positions()[t[k]] - pm.positions()[t[(k + 1) % 3]]).norm();
+    for (int k = 0; k < 3; ++k) {
+      const double length2 = (pm.positions()[t[k]] - pm.positions()[t[(k + 1) % 3]]).squaredNorm();
+      edge_sum += std::sqrt(length2), edge_sum2 += length2;
+    }
   }
   strip.mean_edge_length = strip.triangles.empty() ? pm.statistics().mean_edge_length
                                                    : edge_sum / (3.0 * double(strip.triangles.size()));
+  strip.mean_squared_edge_length = strip.triangles.empty() ? strip.mean_edge_length * strip.mean_edge_length
+                                                           : edge_sum2 / (3.0 * double(strip.triangles.size()));
 
   // Triangle adjacency inside the strip, for walking point location: the mesh's face table
   // (built once in prepare_mesh) restricted to the strip.

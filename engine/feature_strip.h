@@ -79,6 +79,7 @@ struct FeatureStrip {
   std::vector<std::uint32_t> line;                       ///< local indices of the line's vertices, in order
   int rings = 0;
   double mean_edge_length = 0;                           ///< over the strip's triangles
+  double mean_squared_edge_length = 0;                   ///< over the strip's triangles
 };
 
 /// The k-ring meshes of the line's vertices (faces whose three vertices are all within k rings).
