@@ -161,6 +161,15 @@ inline double feature_value(const CurvatureField& field, std::uint32_t v, double
   return a > b ? a : b;
 }
 
+/// The noise floor of feature values, times the local edge length h: a vertex's feature value k
+/// bends the surface over the jets' radius R (local edge lengths) by k R^2 h^2 / 2, which must be
+/// at least `signal_to_noise` times the estimated noise sigma h, so k >= (2 m sigma / R^2) / h.
+/// R is 1 without jets (the cotangent field); 0 when the noise is not estimated.
+inline double noise_floor_times_edge(const CurvatureField& field, double signal_to_noise) {
+  const double radius = field.radius > 0 ? field.radius : 1.0;
+  return 2 * signal_to_noise * field.noise / (radius * radius);
+}
+
 /// The principal curvature of larger magnitude, signed (what the curvature map shows).
 inline double dominant_curvature(const CurvatureField& field, std::uint32_t v) {
   return -field.k_min[v] > field.k_max[v] ? field.k_min[v] : field.k_max[v];

@@ -294,10 +294,7 @@ std::vector<FeatureVertexSeed> find_vertex_seeds(const PreparedMesh& mesh, Featu
   if (options.max_vertices_per_sign == 0) return seeds;
   const CurvatureField& field = mesh.curvature();
   const double s = crease_sign_value(sign);
-  const double radius = field.radius > 0 ? field.radius : 1.0;
-  // The noise floor k >= 2 m sigma / (R^2 h) (see FeatureSeedOptions::min_signal_to_noise), as
-  // a factor of 1/h.
-  const double floor_times_h = 2 * options.min_signal_to_noise * field.noise / (radius * radius);
+  const double floor_times_h = noise_floor_times_edge(field, options.min_signal_to_noise);
   std::vector<std::pair<double, std::uint32_t>> candidates;  // (strength, vertex)
   for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
     if (mesh.component()[v] < 0 || excluded[v]) continue;
@@ -362,9 +359,8 @@ FeatureSeeds find_feature_seeds(const PreparedMesh& mesh, const FeatureSeedOptio
   const std::vector<char> excluded = near_creases_or_boundary(mesh, options.crease_clearance);
   seeds.ridge_vertices = find_vertex_seeds(mesh, FeatureSign::ridge, options, excluded, stats.ridge_candidates, cancel);
   seeds.valley_vertices = find_vertex_seeds(mesh, FeatureSign::valley, options, excluded, stats.valley_candidates, cancel);
-  const double radius = mesh.curvature().radius > 0 ? mesh.curvature().radius : 1.0;
-  stats.noise_floor_strength = 2 * options.min_signal_to_noise * mesh.curvature().noise /
-                               (radius * radius * mesh.statistics().mean_edge_length) / mesh.curvature_scale();
+  stats.noise_floor_strength = noise_floor_times_edge(mesh.curvature(), options.min_signal_to_noise) /
+                               mesh.statistics().mean_edge_length / mesh.curvature_scale();
   stats.elapsed_ms = lap_ms(clock);
   return seeds;
 }

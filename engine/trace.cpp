@@ -186,8 +186,7 @@ class Tracer {
   Tracer(const PreparedMesh& mesh, const TraceOptions& options, const Seed& seed, int max_edges, const Cancellation* cancel)
       : mesh_(mesh), options_(options), sign_(sign_value(seed.sign)), max_edges_(max_edges), cancel_(cancel) {
     seed_value_ = feature_value(mesh.curvature(), seed.vertex, sign_);
-    const double radius = mesh.curvature().radius > 0 ? mesh.curvature().radius : 1.0;
-    floor_times_h_ = 2 * options.min_signal_to_noise * mesh.curvature().noise / (radius * radius);
+    floor_times_h_ = noise_floor_times_edge(mesh.curvature(), options.min_signal_to_noise);
     path_options_.feature_weight_floor = 0.05;
     blocked_.push_back(seed.vertex);
   }
