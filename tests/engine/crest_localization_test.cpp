@@ -83,6 +83,21 @@ TEST(CrestLocalization, CleanCoarseSinesAreNotCutInsideTheirBends) {
     }
 }
 
+TEST(CrestLocalization, FitsCutShortByTheStripsBorderAreMadeSymmetric) {
+  // 245k triangles, clean: the strip follows the initial edge path, several edges inside the
+  // arc's bend, so the strip's border cuts the outer side of many fits short. A quadratic over
+  // that lopsided window put the line 0.017 e inside the bend (0.017 e off the crest); cut to the
+  // shorter side, within 0.012 e.
+  for (const double amplitude : {0.3, -0.3}) {
+    SCOPED_TRACE(amplitude > 0 ? "ridge" : "valley");
+    const CurvedCrestField field = seed_two_arc(351, amplitude);
+    const double e = mean_edge_length(field.field.mesh);
+    const auto [inward, distance] = offsets_along_crest(field, e);
+    EXPECT_LT(std::abs(inward.mean), 0.012);
+    EXPECT_LT(distance.mean, 0.014);
+  }
+}
+
 TEST(CrestLocalization, NoisyCoarseArcIsLocalisedAcrossItsNarrowStrip) {
   // 5k triangles at 10% noise: the jets span about 6 edges, the strips a few rings. Left to the
   // snake (fits never finer than the jets), the line sat 0.063-0.066 e inside the arc (0.074-0.079 e
