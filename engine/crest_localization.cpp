@@ -134,7 +134,8 @@ constexpr double kBendFrameMaxNoise = 0.09;
 // 0.142).
 constexpr double kNarrowestStripFit = 3;
 // ... on meshes at least this noisy (estimated, local edge lengths): the fields it was measured on
-// (10-20% noise reads 0.037-0.074). On cleaner scans it bought little for its cost: on the bunny
+// (10-20% noise reads 0.037-0.074). Below it a mesh counts as clean for the fits here: symmetric
+// windows (symmetric_reach) apply below it, crest.unblur from it. On cleaner scans it bought little for its cost: on the bunny
 // (0.021) along-feature lines took 12-28% longer (bench_pipeline) for 0.03% more mean strength.
 constexpr double kNarrowStripMinNoise = 0.03;
 
@@ -353,7 +354,7 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
   normals.front() = end_normal(points, 0, radius), normals.back() = end_normal(points, 1, radius);
   // The bend over three fit radii: the crest's, not the line's ripple at the scale of one fit,
   // which measuring from it would amplify (a ripple bent one way reads as a crest bent the other).
-  const bool bent_frame = o.follow_bend && mesh.curvature().noise < kBendFrameMaxNoise;
+  const bool bent_frame = o.follow_bend && noise < kBendFrameMaxNoise;
   const std::vector<double> bends = bent_frame ? line_bends(points, normals, 3 * radius) : std::vector<double>(n, 0.0);
   const VertexGrid grid(flat, radius);
   const FitInput in{flat, grid, field, on_crease, crease_reach, h, symmetric};

@@ -25,6 +25,18 @@ CurvedCrestField seed_two_arc(int n, double amplitude) {
   return make_curved_crest_field(options);
 }
 
+// seed_two_arc at 10% noise (RMS, of the grid spacing), and its mean edge length before the noise.
+struct NoisyArc {
+  CurvedCrestField field;
+  double e = 0;
+};
+NoisyArc noisy_seed_two_arc(int n, double amplitude) {
+  NoisyArc arc{seed_two_arc(n, amplitude)};
+  arc.e = mean_edge_length(arc.field.field.mesh);
+  arc.field.field.mesh = with_noise(arc.field.field.mesh, 0.1 * arc.field.field.spacing / arc.e, 1);
+  return arc;
+}
+
 // The refined line from keys at the start, middle and end of the curved crest.
 std::vector<Eigen::Vector3d> line_along_arc(const CurvedCrestField& field, const CrestOptions& crest = {}) {
   const auto mesh = prepare_mesh(field.field.mesh);
@@ -104,10 +116,8 @@ TEST(CrestLocalization, NoisyCoarseArcIsLocalisedAcrossItsNarrowStrip) {
   // off); fitted across the strip's whole width, 0.019 e inside (0.049-0.051 e off).
   for (const double amplitude : {0.3, -0.3}) {
     SCOPED_TRACE(amplitude > 0 ? "ridge" : "valley");
-    CurvedCrestField field = seed_two_arc(51, amplitude);
-    const double e = mean_edge_length(field.field.mesh);
-    field.field.mesh = with_noise(field.field.mesh, 0.1 * field.field.spacing / e, 1);
-    const auto [inward, distance] = offsets_along_crest(field, e);
+    const NoisyArc arc = noisy_seed_two_arc(51, amplitude);
+    const auto [inward, distance] = offsets_along_crest(arc.field, arc.e);
     EXPECT_LT(inward.mean, 0.05);
     EXPECT_LT(distance.mean, 0.06);
   }
@@ -119,13 +129,11 @@ TEST(CrestLocalization, UnblurTakesTheSmoothedFieldsBiasOutOfABend) {
   // (sigma^2 / 2R, R = 35 e), and the line with it. crest.unblur moves it back out.
   for (const double amplitude : {0.3, -0.3}) {
     SCOPED_TRACE(amplitude > 0 ? "ridge" : "valley");
-    CurvedCrestField field = seed_two_arc(111, amplitude);
-    const double e = mean_edge_length(field.field.mesh);
-    field.field.mesh = with_noise(field.field.mesh, 0.1 * field.field.spacing / e, 1);
+    const NoisyArc arc = noisy_seed_two_arc(111, amplitude);
     CrestOptions unblur;
     unblur.unblur = true;
-    const auto blurred = offsets_along_crest(field, e);
-    const auto unblurred = offsets_along_crest(field, e, unblur);
+    const auto blurred = offsets_along_crest(arc.field, arc.e);
+    const auto unblurred = offsets_along_crest(arc.field, arc.e, unblur);
     EXPECT_GT(blurred.inward.mean, 0.04);
     EXPECT_LT(std::abs(unblurred.inward.mean), 0.025);
     EXPECT_LT(unblurred.distance.mean, blurred.distance.mean);
