@@ -45,6 +45,30 @@ void extend_chain(const PreparedMesh& mesh, VertexChain& chain, std::uint32_t v,
   chain.linked.resize(chain.vertices.size(), 1);
 }
 
+/// Whether a-b is an edge of exactly one face (on the mesh's boundary).
+bool is_boundary_edge(const PreparedMesh& mesh, std::uint32_t a, std::uint32_t b) {
+  int faces = 0;
+  for (const std::uint32_t f : mesh.faces_around(a)) faces += corner_of(mesh.triangles()[f], b) >= 0;
+  return faces == 1;
+}
+
+/// Drops each vertex b of a chain a -> b -> c where a-c is a boundary edge: a line running
+/// along the border within a fraction of an edge snaps to border and inner vertices in turn,
+/// and the detour through b would cut face (a, b, c) off as a one-face segment; the cut along
+/// the border edge itself separates nothing.
+void follow_the_border(const PreparedMesh& mesh, VertexChain& chain) {
+  VertexChain kept;
+  for (std::size_t i = 0; i < chain.vertices.size(); ++i) {
+    const bool detour = i > 0 && i + 1 < chain.vertices.size() && chain.linked[i] && chain.linked[i + 1] &&
+                        !kept.vertices.empty() && kept.vertices.back() == chain.vertices[i - 1] &&
+                        is_boundary_edge(mesh, chain.vertices[i - 1], chain.vertices[i + 1]);
+    if (detour) continue;
+    kept.vertices.push_back(chain.vertices[i]);
+    kept.linked.push_back(chain.linked[i]);
+  }
+  chain = std::move(kept);
+}
+
 /// The paper: "the vertices nearest to the obtained feature line are finally chosen as the
 /// segmentation line": the nearest corner of each refined point, consecutive ones joined.
 VertexChain nearest_vertex_chain(const PreparedMesh& mesh, const FeatureLineResult& line, std::size_t& gaps) {
@@ -58,6 +82,7 @@ VertexChain nearest_vertex_chain(const PreparedMesh& mesh, const FeatureLineResu
     extend_chain(mesh, chain, nearest, gaps);
   }
   if (line.closed && chain.vertices.size() > 2) extend_chain(mesh, chain, chain.vertices.front(), gaps);
+  follow_the_border(mesh, chain);
   return chain;
 }
 

@@ -12,6 +12,7 @@
 #include "api/segmentation_json.h"
 #include "engine/errors.h"
 #include "engine/feature_line.h"
+#include "engine/internal/geometry.h"
 #include "engine/segmentation.h"
 #include "tests/support/synthetic_meshes.h"
 
@@ -471,6 +472,50 @@ TEST(Segmentation, TinyRegionsAreReported) {
   EXPECT_EQ(s.segments[1].faces, std::size_t(capsule.segments));  // the fan around the pole
   ASSERT_EQ(s.warnings.size(), 1u);
   EXPECT_EQ(s.warnings[0].rfind("segment 1 is tiny: ", 0), 0u) << s.warnings[0];
+}
+
+TEST(Segmentation, ALineAlongTheBorderCutsOffNoSliver) {
+  // A line that starts along the border within a fraction of an edge snaps to a border vertex,
+  // the inner corner of the border edge's face, and the next border vertex: cut along those
+  // two edges, that face would be a one-face segment. Then the line follows the border one more
+  // edge and crosses to the far side along a row of vertices.
+  const auto mesh = prepare_mesh(make_plane_grid(11, 0, 1));
+  auto point_at = [&](double x, double y) {
+    for (std::uint32_t f = 0; f < mesh->n_faces(); ++f) {
+      const auto& t = mesh->triangles()[f];
+      const Eigen::Vector3d a = mesh->positions()[t[0]], b = mesh->positions()[t[1]], c = mesh->positions()[t[2]];
+      const double area = (b - a).cross(c - a).z(), p[2] = {x, y};
+      auto cross = [&](const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
+        return (v.x() - u.x()) * (p[1] - u.y()) - (v.y() - u.y()) * (p[0] - u.x());
+      };
+      const double wa = cross(b, c) / area, wb = cross(c, a) / area, wc = cross(a, b) / area;
+      if (wa >= -1e-12 && wb >= -1e-12 && wc >= -1e-12) {
+        SurfacePoint s;
+        s.face = f;
+        s.barycentric = {wa, wb, wc};
+        s.position = mesh->point_at(f, s.barycentric);
+        return s;
+      }
+    }
+    throw std::runtime_error("no face holds the point");
+  };
+  // Border edge (-1, 0) - (-1, -0.2) and its face's inner corner.
+  const std::uint32_t a = mesh->nearest_vertex({-1, 0, 0}), c = mesh->nearest_vertex({-1, -0.2, 0});
+  ASSERT_TRUE(mesh->are_neighbors(a, c));
+  std::uint32_t b = kNoIndex;
+  for (const std::uint32_t f : mesh->faces_around(a))
+    for (const auto v : mesh->triangles()[f])
+      if (v != a && v != c && corner_of(mesh->triangles()[f], c) >= 0) b = v;
+  ASSERT_NE(b, kNoIndex);
+  ASSERT_FALSE(mesh->boundary_vertex()[b]);
+  const std::uint32_t d = mesh->nearest_vertex({-1, -0.4, 0});
+  std::vector<SurfacePoint> points;
+  for (const auto v : {a, b, c, d}) points.push_back(surface_point_at_vertex(*mesh, v));
+  for (double x = -0.9; x <= 1.0001; x += 0.1) points.push_back(point_at(std::min(x, 1.0), -0.4));
+  const auto r = segment_mesh(*mesh, {line_of(points, false)}, SegmentationOptions{});
+  ASSERT_EQ(r.segments.size(), 2u);
+  EXPECT_TRUE(r.warnings.empty()) << r.warnings[0];
+  EXPECT_NEAR(r.segments[0].area + r.segments[1].area, 4, 1e-9);
 }
 
 TEST(Segmentation, BadInputIsRejected) {
