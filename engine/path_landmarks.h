@@ -2,8 +2,8 @@
 // A*, landmarks and the triangle inequality; Goldberg & Harrelson 2005). For every landmark L,
 // d(L, t) <= d(L, v) + d(v, t), so |d(L, t) - d(L, v)| bounds the cost from v to t from below,
 // and the bound is consistent (it changes by at most an edge's cost along that edge). Off every
-// feature the only other bound is the cheapest cost per unit length (the 5% floor) times the
-// straight-line distance, twenty times too low, and a search guided by it floods a disc; the
+// feature the only other bound is the cheapest cost per unit length (the 10% floor) times the
+// straight-line distance, ten times too low, and a search guided by it floods a disc; the
 // landmarks' bound is close to the true cost there, so a search settles little more than the
 // vertices near its path.
 #pragma once
@@ -28,7 +28,7 @@ class PathLandmarks {
   /// sign, InitialLineOptions' default feature_weight_floor): every feature path, whatever its
   /// sign (a sign only raises costs) and whatever its floor above this, costs at least as much
   /// edge by edge; plain edge length too.
-  static constexpr double kFloor = 0.05;
+  static constexpr double kFloor = 0.1;
   /// Distances in units of unit(); kUnreachable where a landmark's component is not the vertex's.
   static constexpr std::uint16_t kUnreachable = 0xFFFF;
   using Distances = std::array<std::uint16_t, kCount>;

@@ -67,7 +67,7 @@ TEST(PathLandmarks, BoundsAreBelowTheCheapestCostsAndNearThem) {
     for (int pair = 0; pair < 12; ++pair) {
       const auto a = std::uint32_t(rng() % mesh->n_vertices()), b = std::uint32_t(rng() % mesh->n_vertices());
       for (double sign : {0.0, 1.0, -1.0})
-        for (double floor : {0.05, 0.2}) {
+        for (double floor : {PathLandmarks::kFloor, 0.2}) {
           InitialLineOptions options;
           options.feature_weight_floor = floor;
           FeaturePathCost cost(*mesh, options, sign);
@@ -76,7 +76,7 @@ TEST(PathLandmarks, BoundsAreBelowTheCheapestCostsAndNearThem) {
           ASSERT_FALSE(path.empty()) << name;
           const double bound = landmarks.lower_bound(landmarks.at(a), landmarks.at(b)), true_cost = path_cost(*mesh, path, cost);
           EXPECT_LE(bound, true_cost) << name << ": " << a << " -> " << b << ", sign " << sign << ", floor " << floor;
-          if (sign == 0 && floor == 0.05) bound_sum += bound, cost_sum += true_cost;
+          if (sign == 0 && floor == PathLandmarks::kFloor) bound_sum += bound, cost_sum += true_cost;
         }
     }
     EXPECT_GT(bound_sum, 0.5 * cost_sum) << name << " ratio " << bound_sum / cost_sum;
