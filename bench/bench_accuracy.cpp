@@ -43,7 +43,8 @@
 //   --cad-only      CAD cases only
 //   --no-curved     no arc and sine crests
 //   --curved-only   arc and sine crests only
-//   --trace         per line on stderr: distances, each piece's outcome, points along the line
+//   --trace         per line on stderr: distances, each piece's outcome, points along the line and
+//                   along its fitted curve
 //   --seeds N       seeds for jitter and noise (default 3)
 //   --quick         fields n = 51 and 111 only, one seed, fandisk.off only (a few seconds)
 //   --variant NAME  run one variant of the table below
@@ -454,6 +455,15 @@ void trace_line(const std::string& name, double noise, int seed, double estimate
   const std::size_t step = std::max<std::size_t>(1, refined.size() / 40);
   for (std::size_t i = 0; i < refined.size(); i += step)
     std::fprintf(stderr, "  (%.3f, %.3f, %.3f) distance %.3f\n", refined[i].x(), refined[i].y(), refined[i].z(), spec.distance(refined[i]));
+  if (!r.fitted || r.fitted->points.empty()) return;
+  const auto& fitted = r.fitted->points;
+  std::fprintf(stderr, "  fitted curve %.3f (crease share %.2f, fallback share %.2f, %zu corners)\n",
+               arc_length_distance(fitted, r.fitted->closed, spec.distance).mean, r.fitted->crease_share,
+               r.fitted->fallback_share, r.fitted->corners);
+  const std::size_t fitted_step = std::max<std::size_t>(1, fitted.size() / 40);
+  for (std::size_t i = 0; i < fitted.size(); i += fitted_step)
+    std::fprintf(stderr, "  fitted (%.3f, %.3f, %.3f) distance %.3f\n", fitted[i].x(), fitted[i].y(), fitted[i].z(),
+                 spec.distance(fitted[i]));
 }
 
 // "51,351" -> {51, 351}; grid sizes n (an n x n field has about 2 n^2 triangles).
