@@ -121,7 +121,7 @@ std::vector<Variant> all_variants() {
       variant("keys within half an edge (crest.max_key_shift 0.5)",
               [](PrepareOptions&, FeatureLineOptions& o) { o.crest.max_key_shift = 0.5; }),
       variant("tangent-frame crest fits (crest.follow_bend off)", [](PrepareOptions&, FeatureLineOptions& o) { o.crest.follow_bend = false; }),
-      variant("blur taken out of bends (crest.unblur)", [](PrepareOptions&, FeatureLineOptions& o) { o.crest.unblur = true; }),
+      variant("the field's blur left in bends (crest.unblur off)", [](PrepareOptions&, FeatureLineOptions& o) { o.crest.unblur = false; }),
       variant("one strip per piece (second_strip off)", [](PrepareOptions&, FeatureLineOptions& o) { o.second_strip = false; }),
       variant("before bent fits, moving keys and second strips", [](PrepareOptions&, FeatureLineOptions& o) {
         o.crest.move_keys = false;

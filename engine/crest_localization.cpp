@@ -290,6 +290,16 @@ constexpr double kUnblurMaxNoise = 0.05;
 // shift predicts (0.02-0.05 grid spacings inside the bend, not 0.15) and the correction put
 // them further off on the other side.
 constexpr double kUnblurMaxBend = 0.1;
+// ... and where the blur is narrow against the crest: sigma at most this share of the fitted
+// profile's half width. The shift is a first-order expansion in sigma; measured on
+// bench_accuracy's fields at 10% noise, the field's own crest lay 0.85 of sigma^2 / 2R into the
+// bend at 245,000 triangles (sigma / half width 0.44), 0.4-0.8 at 24,200 (0.53-0.60), and at
+// 5,000 (0.84) the correction put sines further off.
+constexpr double kUnblurMaxWidthShare = 0.75;
+// The share of the first-order shift taken: the measured offsets above lie below it, and the
+// full shift put the 24,200-triangle sines further off (0.052 -> 0.067 grid spacings) where
+// three quarters take every 10% curved cell nearer.
+constexpr double kUnblurGain = 0.75;
 
 }  // namespace
 
@@ -359,6 +369,7 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
   const VertexGrid grid(flat, radius);
   const FitInput in{flat, grid, field, on_crease, crease_reach, h, symmetric};
   std::array<bool, 2> moves{false, false};  // ends whose fit found a crest within reach
+  std::vector<double> half_widths(n, std::nan(""));
   for (std::size_t i = 0; i < n; ++i) {
     const bool end = i == 0 || i + 1 == n;
     const CrestEnd& at = ends[i == 0 ? 0 : 1];
@@ -373,7 +384,9 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
       offsets[i] = 0;
       continue;
     }
-    const double s = fit_crest(in, points[i].uv, normals[i], bends[i], radius, kMinCrestDrop).offset;
+    const CrestFit fit = fit_crest(in, points[i].uv, normals[i], bends[i], radius, kMinCrestDrop);
+    const double s = fit.offset;
+    half_widths[i] = fit.half_width;
     const double reach = (end ? o.max_key_shift : o.max_shift) * h;
     if (std::abs(s) <= reach) offsets[i] = s, ++result.moved;
     else if (end) offsets[i] = 0;  // no crest within reach: the end stays on its vertex
@@ -383,11 +396,13 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
   std::vector<double> smoothed = smooth_offsets(offsets, o.smoothing_passes);
   if (o.unblur && noise >= kNarrowStripMinNoise && noise < kUnblurMaxNoise) {
     const double variance = field_blur_variance(mesh.curvature(), h, strip.mean_squared_edge_length);
+    const double sigma = std::sqrt(variance);
     const std::vector<double> line_bend = bent_frame ? bends : line_bends(points, normals, 3 * radius);
     for (std::size_t i = 0; i < n; ++i) {
       const bool end = i == 0 || i + 1 == n;
       if ((end && !moves[i == 0 ? 0 : 1]) || (!end && !std::isfinite(offsets[i]) && smoothed[i] == 0)) continue;
-      if (std::sqrt(variance) * std::abs(line_bend[i]) <= kUnblurMaxBend) smoothed[i] -= 0.5 * variance * line_bend[i];
+      if (sigma * std::abs(line_bend[i]) <= kUnblurMaxBend && sigma <= kUnblurMaxWidthShare * half_widths[i])
+        smoothed[i] -= kUnblurGain * 0.5 * variance * line_bend[i];
     }
   }
   for (std::size_t i = 0; i < n; ++i) {

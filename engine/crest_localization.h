@@ -46,13 +46,13 @@ struct CrestOptions {
   /// its tangent.
   bool follow_bend = true;
   /// Takes the field's blur out of bends. The jets and smoothing passes that make the field blur
-  /// it, which moves the crest of a bent feature into its bend by sigma^2 / (2 R) (sigma^2: the
-  /// blur's variance per axis, R: the bend's radius); each point then moves that far out of the
-  /// line's bend, on meshes whose estimated noise is 0.03-0.05 local edge lengths and where the
-  /// bend is gentle against the blur (sigma / R at most 0.1). Off by default: it takes arcs at
-  /// 24k-245k triangles and sines at 245k nearly all the way to the crest at 10% noise, but puts
-  /// sines on 5k-24k triangles a little further off (accuracy.md).
-  bool unblur = false;
+  /// it, which moves the crest of a bent feature into its bend by sigma^2 / (2 R) to first order
+  /// (sigma^2: the blur's variance per axis, R: the bend's radius); each point then moves three
+  /// quarters of that out of the line's bend, on meshes whose estimated noise is 0.03-0.05 local
+  /// edge lengths, where the bend is gentle against the blur (sigma / R at most 0.1) and the blur
+  /// narrow against the crest (sigma at most 0.75 of the fitted profile's half width), where the
+  /// first-order shift holds (accuracy.md). false: the field's crest is kept.
+  bool unblur = true;
 
   static constexpr ValidRange radius_range = closed_range(1, 12);
   static constexpr ValidRange max_shift_range = closed_range(0, 2);
