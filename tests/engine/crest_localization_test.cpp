@@ -161,6 +161,22 @@ TEST(CrestLocalization, UnblurLeavesABlurAsWideAsTheCrestAlone) {
   }
 }
 
+TEST(CrestLocalization, ASecondStripOnTheCrestIsKeptWithinTheSlack) {
+  // A clean 24k-triangle sine (seed 1): the initial path cuts the bend at the sine's peak, the
+  // first snake's line stops at its strip's border 0.25 grid spacings off the crest, where no
+  // crest fit has room, and reads 0.1% stronger there than the second strip's localised line on
+  // the crest. The second is kept: it is weaker only within the localisation's own slack.
+  CurvedCrestOptions options;
+  options.curve = CrestCurve::sine;
+  options.n = 111;
+  options.seed = 1;
+  options.amplitude = 0.3;
+  const CurvedCrestField sine = make_curved_crest_field(options);
+  double largest = 0;
+  for (const auto& p : line_along_arc(sine)) largest = std::max(largest, sine.distance(p.x(), p.y()) / sine.field.spacing);
+  EXPECT_LT(largest, 0.1);
+}
+
 TEST(CrestLocalization, CleanCoarseArcKeepsItsLocalisedPieces) {
   // A clean 5k-triangle arc (seed 2): the crest passes between vertices, and a line on it reads a
   // little weaker on the linearly interpolated field than the snake's line through vertices
