@@ -82,12 +82,7 @@ TEST(CrestLocalization, CleanCoarseSinesAreNotCutInsideTheirBends) {
   for (const std::uint64_t seed : {1, 2, 3})
     for (const double amplitude : {0.3, -0.3}) {
       SCOPED_TRACE("seed " + std::to_string(seed) + (amplitude > 0 ? " ridge" : " valley"));
-      CurvedCrestOptions options;
-      options.curve = CrestCurve::sine;
-      options.n = 51;
-      options.seed = seed;
-      options.amplitude = amplitude;
-      const CurvedCrestField field = make_curved_crest_field(options);
+      const CurvedCrestField field = make_sine_crest_field(51, seed, amplitude);
       const double e = mean_edge_length(field.field.mesh);
       const auto [inward, distance] = offsets_along_crest(field, e);
       EXPECT_LT(std::abs(inward.mean), 0.03);
@@ -145,12 +140,7 @@ TEST(CrestLocalization, UnblurLeavesABlurAsWideAsTheCrestAlone) {
   // crest profile's half width, where the first-order shift overstates the field's offset (the
   // lines went 0.009 grid spacings further off with it); the lines stay on the field's crest.
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-    CurvedCrestOptions options;
-    options.curve = CrestCurve::sine;
-    options.n = 51;
-    options.seed = seed;
-    options.amplitude = 0.3;
-    CurvedCrestField sine = make_curved_crest_field(options);
+    CurvedCrestField sine = make_sine_crest_field(51, seed);
     const double e = mean_edge_length(sine.field.mesh);
     sine.field.mesh = with_noise(sine.field.mesh, 0.1 * sine.field.spacing / e, seed);
     CrestOptions kept_blur;
@@ -166,12 +156,7 @@ TEST(CrestLocalization, ASecondStripOnTheCrestIsKeptWithinTheSlack) {
   // first snake's line stops at its strip's border 0.25 grid spacings off the crest, where no
   // crest fit has room, and reads 0.1% stronger there than the second strip's localised line on
   // the crest. The second is kept: it is weaker only within the localisation's own slack.
-  CurvedCrestOptions options;
-  options.curve = CrestCurve::sine;
-  options.n = 111;
-  options.seed = 1;
-  options.amplitude = 0.3;
-  const CurvedCrestField sine = make_curved_crest_field(options);
+  const CurvedCrestField sine = make_sine_crest_field(111, 1);
   double largest = 0;
   for (const auto& p : line_along_arc(sine)) largest = std::max(largest, sine.distance(p.x(), p.y()) / sine.field.spacing);
   EXPECT_LT(largest, 0.1);

@@ -137,12 +137,7 @@ TEST(FittedCurve, CleanCurveEndsStayOnTheCrest) {
   // end control points have one interval's points to go by, and without holding the ends to
   // their fitted points the penalty bent them up to 0.69 grid spacings off at the keys.
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-    CurvedCrestOptions options;
-    options.curve = CrestCurve::sine;
-    options.n = 51;
-    options.seed = seed;
-    options.amplitude = 0.3;
-    const CurvedCrestField sine = make_curved_crest_field(options);
+    const CurvedCrestField sine = make_sine_crest_field(51, seed);
     const auto mesh = prepare_mesh(sine.field.mesh);
     FeatureLineRequest request;
     request.keys = keys_on_curved_crest(sine, {0.0, 0.5, 1.0});

@@ -168,4 +168,13 @@ std::vector<std::uint32_t> keys_on_curved_crest(const CurvedCrestField& field, c
   return keys;
 }
 
+CurvedCrestField make_sine_crest_field(int n, std::uint64_t seed, double amplitude) {
+  CurvedCrestOptions options;
+  options.curve = CrestCurve::sine;
+  options.n = n;
+  options.seed = seed;
+  options.amplitude = amplitude;
+  return make_curved_crest_field(options);
+}
+
 }  // namespace featureline::testing

@@ -56,6 +56,10 @@ struct CurvedCrestField {
 /// The field described by `options`.
 CurvedCrestField make_curved_crest_field(const CurvedCrestOptions& options);
 
+/// A sine crest with the other options at their defaults (n grid points per side, jitter and
+/// noise-free heights from `seed`; amplitude > 0 ridge, < 0 valley).
+CurvedCrestField make_sine_crest_field(int n, std::uint64_t seed, double amplitude = 0.3);
+
 /// The feature crest of a make_ridge_field field: where the larger principal curvature magnitude
 /// peaks along the crest curve's normals. That field's profile is vertical (y - crest(x)), so in
 /// its bends the peak lies off the curve, up to 0.00035 at the default bend 0.3 and width 0.25
