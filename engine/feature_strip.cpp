@@ -249,6 +249,78 @@ std::vector<std::uint32_t> triangles_connected_to_line(const FeatureStrip& strip
   return component;
 }
 
+// The strip's vertices in the order that keeps the conformal map's normal matrix banded: up
+// the line's left side, then back down its right side (by FeatureStrip::line_position), so
+// each unknown's neighbours lie within a few rings' count of it and the two sides, which only
+// meet around the line's ends, are not interleaved. A side is found by flooding the strip's
+// triangles from the line's edges without crossing them.
+std::vector<std::uint32_t> vertices_around_line(const FeatureStrip& strip) {
+  const std::size_t edges = strip.line.size() - 1, n = strip.vertices.size();
+  std::vector<std::int64_t> line_index(n, -1);
+  for (std::size_t i = 0; i < strip.line.size(); ++i) line_index[strip.line[i]] = std::int64_t(i);
+  // Corner k's opposite edge, as 0 (not a line edge), 1 (the line runs along it with the
+  // triangle on its left) or 2 (on its right).
+  const auto line_edge_side = [&](const std::array<std::uint32_t, 3>& t, int k) {
+    const auto a = line_index[t[std::size_t(k + 1) % 3]], b = line_index[t[std::size_t(k + 2) % 3]];
+    if (a < 0 || b < 0) return 0;
+    return b == a + 1 ? 1 : a == b + 1 ? 2 : 0;
+  };
+  std::vector<std::uint8_t> triangle_side(strip.triangles.size(), 0), vertex_side(n, 0);
+  std::vector<std::uint32_t> queue;
+  for (std::uint32_t t = 0; t < strip.triangles.size(); ++t)
+    for (int k = 0; k < 3 && !triangle_side[t]; ++k)
+      if (const int side = line_edge_side(strip.triangles[t], k)) triangle_side[t] = std::uint8_t(side), queue.push_back(t);
+  for (std::size_t i = 0; i < queue.size(); ++i) {
+    const auto t = queue[i];
+    for (auto v : strip.triangles[t])
+      if (!vertex_side[v]) vertex_side[v] = triangle_side[t];
+    for (int k = 0; k < 3; ++k) {
+      const auto next = strip.triangle_neighbors[t][std::size_t(k)];
+      if (next < 0 || triangle_side[std::size_t(next)] || line_edge_side(strip.triangles[t], k)) continue;
+      triangle_side[std::size_t(next)] = triangle_side[t];
+      queue.push_back(std::uint32_t(next));
+    }
+  }
+  // Counting sort by the position around the line: 0..edges up the left, then back down.
+  const auto key = [&](std::uint32_t v) {
+    return vertex_side[v] == 2 ? 2 * edges + 1 - strip.line_position[v] : strip.line_position[v];
+  };
+  std::vector<std::uint32_t> start(2 * edges + 3, 0);
+  for (std::uint32_t v = 0; v < n; ++v) ++start[key(v) + 1];
+  for (std::size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
+  std::vector<std::uint32_t> order(n);
+  for (std::uint32_t v = 0; v < n; ++v) order[start[key(v)]++] = v;
+  return order;
+}
+
+// Entries of a symmetric matrix's lower envelope (row i from its first non-zero to the diagonal),
+// which bounds an LDLT factor's fill in the matrix's own order.
+template <typename Matrix>
+std::size_t envelope_size(const Matrix& matrix) {
+  std::vector<Eigen::Index> first(std::size_t(matrix.rows()));
+  for (Eigen::Index i = 0; i < matrix.rows(); ++i) first[std::size_t(i)] = i;
+  for (Eigen::Index col = 0; col < matrix.outerSize(); ++col)
+    for (typename Matrix::InnerIterator it(matrix, col); it; ++it)
+      first[std::size_t(it.row())] = std::min(first[std::size_t(it.row())], col);
+  std::size_t size = 0;
+  for (Eigen::Index i = 0; i < matrix.rows(); ++i) size += std::size_t(i - first[std::size_t(i)]) + 1;
+  return size;
+}
+
+// Below this many envelope entries per unknown the strip's own order is factored as it is (a
+// strip 8 rings wide on each side has about 20 per row); beyond it (a strip that touches itself
+// far along the line) a fill-reducing ordering costs less than the fill.
+constexpr std::size_t kNaturalOrderEnvelope = 48;
+
+template <typename Ordering, typename Matrix>
+std::optional<Eigen::VectorXcd> solve_normal_equations(const Matrix& normal, const Eigen::VectorXcd& rhs) {
+  Eigen::SimplicialLDLT<Matrix, Eigen::Lower, Ordering> solver(normal);
+  if (solver.info() != Eigen::Success) return std::nullopt;
+  Eigen::VectorXcd x = solver.solve(rhs);
+  if (solver.info() != Eigen::Success || !x.allFinite()) return std::nullopt;
+  return x;
+}
+
 // Least-squares conformal map (Levy et al. 2002) of the strip around the line: in complex
 // coordinates a triangle with 3D corners z_k (in its own plane) maps to w_k by a similarity
 // exactly when sum_k W_k w_k = 0 with W_0 = z_1 - z_2, W_1 = z_2 - z_0, W_2 = z_0 - z_1; the
@@ -264,10 +336,17 @@ bool place_conformally(const PreparedMesh& pm, const FeatureStrip& strip, FlatSt
   constexpr std::int64_t kPinned = -1, kOutside = -2;
   std::vector<std::int64_t> unknown(n, kOutside);
   for (auto v : strip.line) unknown[v] = kPinned;
-  std::int64_t count = 0;
   for (auto t : component)
     for (auto v : strip.triangles[t])
-      if (unknown[v] == kOutside) unknown[v] = count++;
+      if (unknown[v] == kOutside) unknown[v] = 0;
+  // Unknowns numbered along the line (by the line vertex each was reached from): a strip is a
+  // band along its line, so in this order the normal matrix is banded and needs no fill-reducing
+  // ordering (solve_normal_equations).
+  std::int64_t count = 0;
+  for (auto v : vertices_around_line(strip))
+    if (unknown[v] == 0) unknown[v] = ++count;
+  for (auto& u : unknown)
+    if (u > 0) --u;
   std::vector<char> line_in_component(n, 0);
   for (auto t : component)
     for (auto v : strip.triangles[t]) line_in_component[v] = 1;
@@ -323,13 +402,13 @@ bool place_conformally(const PreparedMesh& pm, const FeatureStrip& strip, FlatSt
   if (count == 0) return true;
   Eigen::SparseMatrix<Complex> normal{Eigen::Index(count), Eigen::Index(count)};
   normal.setFromTriplets(entries.begin(), entries.end());
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<Complex>> solver(normal);
-  if (solver.info() != Eigen::Success) return false;
-  const Eigen::VectorXcd x = solver.solve(rhs);
-  if (solver.info() != Eigen::Success || !x.allFinite()) return false;
+  const auto x = envelope_size(normal) <= kNaturalOrderEnvelope * std::size_t(count)
+                     ? solve_normal_equations<Eigen::NaturalOrdering<int>>(normal, rhs)
+                     : solve_normal_equations<Eigen::AMDOrdering<int>>(normal, rhs);
+  if (!x) return false;
   for (std::size_t v = 0; v < n; ++v) {
     if (unknown[v] < 0) continue;
-    flat.uv[v] = Eigen::Vector2d(x[unknown[v]].real(), x[unknown[v]].imag());
+    flat.uv[v] = Eigen::Vector2d((*x)[unknown[v]].real(), (*x)[unknown[v]].imag());
     flat.placed[v] = 1;
   }
   return true;
