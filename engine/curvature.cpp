@@ -229,49 +229,56 @@ std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::ve
 constexpr double kMinBarrierExtent = 4;
 constexpr int kBarrierRings = 5;
 
-std::vector<char> fit_barriers(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, const CurvatureField& field,
-                               const std::vector<double>& local) {
-  const std::size_t n = P.size();
-  std::vector<char> barrier(n, 0);
-  std::vector<std::int32_t> run_of(n, -1);
-  std::vector<std::vector<std::uint32_t>> short_runs;
-  std::vector<std::uint32_t> run, front;
-  for (std::uint32_t start = 0; start < n; ++start) {
-    if (!field.on_crease[start] || run_of[start] >= 0) continue;
-    run.assign(1, start);
-    run_of[start] = 0;
+// Crease edges joined at their vertices, and whether the run is long (kMinBarrierExtent).
+struct CreaseRun {
+  std::vector<std::uint32_t> vertices;
+  bool is_long = false;
+};
+
+std::vector<CreaseRun> crease_runs(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj,
+                                   const CurvatureField& field, const std::vector<double>& local) {
+  std::vector<CreaseRun> runs;
+  std::vector<char> in_run(P.size(), 0);
+  for (std::uint32_t start = 0; start < P.size(); ++start) {
+    if (!field.on_crease[start] || in_run[start]) continue;
+    CreaseRun run;
+    run.vertices.assign(1, start);
+    in_run[start] = 1;
     Eigen::AlignedBox3d box(P[start]);
     double edge_sum = 0;
-    for (std::size_t i = 0; i < run.size(); ++i) {
-      const auto v = run[i];
+    for (std::size_t i = 0; i < run.vertices.size(); ++i) {
+      const auto v = run.vertices[i];
       box.extend(P[v]);
       edge_sum += local[v];
-      for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
-        const auto w = adj.neighbors[k];
-        if (field.crease[k] == 0 || run_of[w] >= 0) continue;
-        run_of[w] = 0;
-        run.push_back(w);
-      }
+      for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k)
+        if (field.crease[k] != 0 && !in_run[adj.neighbors[k]])
+          in_run[adj.neighbors[k]] = 1, run.vertices.push_back(adj.neighbors[k]);
     }
-    if (box.diagonal().norm() >= kMinBarrierExtent * edge_sum / double(run.size())) {
-      for (auto v : run) barrier[v] = 1;
-      front.insert(front.end(), run.begin(), run.end());
-    } else {
-      short_runs.push_back(run);
-    }
+    run.is_long = box.diagonal().norm() >= kMinBarrierExtent * edge_sum / double(run.vertices.size());
+    runs.push_back(std::move(run));
   }
-  // Rings around the long runs.
-  std::vector<char> near(barrier);
-  for (int ring = 0; ring < kBarrierRings && !front.empty(); ++ring) {
-    std::vector<std::uint32_t> next;
+  return runs;
+}
+
+std::vector<char> fit_barriers(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, const CurvatureField& field,
+                               const std::vector<double>& local) {
+  const std::vector<CreaseRun> runs = crease_runs(P, adj, field, local);
+  // Flags the vertices within kBarrierRings of the long runs, ring by ring.
+  std::vector<char> near(P.size(), 0);
+  std::vector<std::uint32_t> front, next;
+  for (const CreaseRun& run : runs)
+    if (run.is_long)
+      for (auto v : run.vertices) near[v] = 1, front.push_back(v);
+  for (int ring = 0; ring < kBarrierRings && !front.empty(); ++ring, front.swap(next)) {
+    next.clear();
     for (auto v : front)
       for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k)
         if (!near[adj.neighbors[k]]) near[adj.neighbors[k]] = 1, next.push_back(adj.neighbors[k]);
-    front.swap(next);
   }
-  for (const auto& r : short_runs)
-    if (std::any_of(r.begin(), r.end(), [&](std::uint32_t v) { return near[v] != 0; }))
-      for (auto v : r) barrier[v] = 1;
+  std::vector<char> barrier(P.size(), 0);
+  for (const CreaseRun& run : runs)
+    if (run.is_long || std::any_of(run.vertices.begin(), run.vertices.end(), [&](std::uint32_t v) { return near[v] != 0; }))
+      for (auto v : run.vertices) barrier[v] = 1;
   return barrier;
 }
 
