@@ -222,7 +222,8 @@ std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::ve
 
 // The crease vertices that bound a jet's neighbourhood (gather): those of crease runs (edges
 // joined at shared vertices) at least kMinBarrierExtent of their mean local edge length across,
-// and of shorter runs within kBarrierRings of those (a crease broken up by noise). Noise alone
+// and of shorter runs within kBarrierRings of a long run of their sign (a crease broken up by
+// noise; beside a convex crease, noise makes short concave runs that are no crease). Noise alone
 // bends a few edges here and there past the crease angle, and a fit stopped at them gathers
 // little more than a one-ring: on a 20%-noisy valley, crest vertices between such edges read as a
 // ridge, holes in the field the snake went round, 1.6 grid spacings off the crest.
@@ -233,7 +234,10 @@ constexpr int kBarrierRings = 5;
 struct CreaseRun {
   std::vector<std::uint32_t> vertices;
   bool is_long = false;
+  int sign = 0;  ///< sum of its edges' signs (each edge counted from both ends)
 };
+
+char sign_bit(const CreaseRun& run) { return run.sign >= 0 ? 1 : 2; }
 
 std::vector<CreaseRun> crease_runs(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj,
                                    const CurvatureField& field, const std::vector<double>& local) {
@@ -250,9 +254,11 @@ std::vector<CreaseRun> crease_runs(const std::vector<Eigen::Vector3d>& P, const 
       const auto v = run.vertices[i];
       box.extend(P[v]);
       edge_sum += local[v];
-      for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k)
+      for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
+        run.sign += field.crease[k];
         if (field.crease[k] != 0 && !in_run[adj.neighbors[k]])
           in_run[adj.neighbors[k]] = 1, run.vertices.push_back(adj.neighbors[k]);
+      }
     }
     run.is_long = box.diagonal().norm() >= kMinBarrierExtent * edge_sum / double(run.vertices.size());
     runs.push_back(std::move(run));
@@ -264,20 +270,27 @@ std::vector<char> fit_barriers(const std::vector<Eigen::Vector3d>& P, const Adja
                                const std::vector<double>& local) {
   const std::vector<CreaseRun> runs = crease_runs(P, adj, field, local);
   // Flags the vertices within kBarrierRings of the long runs, ring by ring.
+  // Flags the vertices within kBarrierRings of the long runs, ring by ring: 1 near a convex run,
+  // 2 near a concave one.
   std::vector<char> near(P.size(), 0);
   std::vector<std::uint32_t> front, next;
   for (const CreaseRun& run : runs)
     if (run.is_long)
-      for (auto v : run.vertices) near[v] = 1, front.push_back(v);
+      for (auto v : run.vertices) near[v] |= sign_bit(run), front.push_back(v);
   for (int ring = 0; ring < kBarrierRings && !front.empty(); ++ring, front.swap(next)) {
     next.clear();
     for (auto v : front)
-      for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k)
-        if (!near[adj.neighbors[k]]) near[adj.neighbors[k]] = 1, next.push_back(adj.neighbors[k]);
+      for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
+        const auto w = adj.neighbors[k];
+        if ((near[w] | near[v]) == near[w]) continue;
+        if (!near[w]) next.push_back(w);
+        near[w] |= near[v];
+      }
   }
   std::vector<char> barrier(P.size(), 0);
   for (const CreaseRun& run : runs)
-    if (run.is_long || std::any_of(run.vertices.begin(), run.vertices.end(), [&](std::uint32_t v) { return near[v] != 0; }))
+    if (run.is_long || std::any_of(run.vertices.begin(), run.vertices.end(),
+                                   [&](std::uint32_t v) { return (near[v] & sign_bit(run)) != 0; }))
       for (auto v : run.vertices) barrier[v] = 1;
   return barrier;
 }
