@@ -333,20 +333,18 @@ bool place_conformally(const PreparedMesh& pm, const FeatureStrip& strip, FlatSt
   if (strip.line.size() < 2) return false;
   const std::vector<std::uint32_t> component = triangles_connected_to_line(strip);
   const std::size_t n = strip.vertices.size();
-  constexpr std::int64_t kPinned = -1, kOutside = -2;
+  constexpr std::int64_t kPinned = -1, kOutside = -2, kUnnumbered = -3;
   std::vector<std::int64_t> unknown(n, kOutside);
   for (auto v : strip.line) unknown[v] = kPinned;
   for (auto t : component)
     for (auto v : strip.triangles[t])
-      if (unknown[v] == kOutside) unknown[v] = 0;
+      if (unknown[v] == kOutside) unknown[v] = kUnnumbered;
   // Unknowns numbered along the line (by the line vertex each was reached from): a strip is a
   // band along its line, so in this order the normal matrix is banded and needs no fill-reducing
   // ordering (solve_normal_equations).
   std::int64_t count = 0;
   for (auto v : vertices_around_line(strip))
-    if (unknown[v] == 0) unknown[v] = ++count;
-  for (auto& u : unknown)
-    if (u > 0) --u;
+    if (unknown[v] == kUnnumbered) unknown[v] = count++;
   std::vector<char> line_in_component(n, 0);
   for (auto t : component)
     for (auto v : strip.triangles[t]) line_in_component[v] = 1;

@@ -252,6 +252,18 @@ TEST(Accuracy, NoisyCreasesAreNeverWorseThanTheInitialLine) {
   }
 }
 
+// A line along a crease chain as bench_accuracy draws it: keys at its ends and middle, or a third
+// of the way round apart on a closed chain.
+FeatureLineRequest chain_request(const CreaseChain& chain) {
+  const auto& v = chain.vertices;
+  const std::size_t n = v.size();
+  FeatureLineRequest request;
+  request.closed = chain.closed;
+  request.keys = chain.closed ? std::vector<std::uint32_t>{v[0], v[n / 3], v[2 * n / 3]}
+                              : std::vector<std::uint32_t>{v.front(), v[n / 2], v.back()};
+  return request;
+}
+
 TEST(Accuracy, NoisyRealCadCreasesAreRefittedCloserToTheTrueCrease) {
   // Every crease chain of the fandisk (keys at its ends and middle) on the mesh with 10% noise:
   // the initial line runs on the noisy crease vertices; the crease fit (engine/crease_fit.h) must
@@ -267,13 +279,7 @@ TEST(Accuracy, NoisyRealCadCreasesAreRefittedCloserToTheTrueCrease) {
   int worse = 0, fitted = 0;
   for (const auto& chain : chains) {
     const auto truth = positions_of(raw, chain.vertices);
-    const auto& v = chain.vertices;
-    const std::size_t n = v.size();
-    FeatureLineRequest request;
-    request.closed = chain.closed;
-    request.keys = chain.closed ? std::vector<std::uint32_t>{v[0], v[n / 3], v[2 * n / 3]}
-                                : std::vector<std::uint32_t>{v.front(), v[n / 2], v.back()};
-    const auto result = detect_feature_line(*mesh, request);
+    const auto result = detect_feature_line(*mesh, chain_request(chain));
     for (const auto& piece : result.piece_reports) fitted += piece.kept == PieceKept::crease_fit;
     double initial = 0, refined = 0;
     for (const auto& p : result.initial_points) initial += distance_to_polyline(truth, chain.closed, p);
@@ -305,13 +311,7 @@ TEST(Accuracy, NoisyRockerArmLinesStayOnTheirCreases) {
     const auto mesh = prepare_mesh(with_noise(raw, 0.1, 1000003ull * seed + 7));
     for (const auto& chain : chains) {
       const auto truth = positions_of(raw, chain.vertices);
-      const auto& v = chain.vertices;
-      const std::size_t n = v.size();
-      FeatureLineRequest request;
-      request.closed = chain.closed;
-      request.keys = chain.closed ? std::vector<std::uint32_t>{v[0], v[n / 3], v[2 * n / 3]}
-                                  : std::vector<std::uint32_t>{v.front(), v[n / 2], v.back()};
-      const auto result = detect_feature_line(*mesh, request);
+      const auto result = detect_feature_line(*mesh, chain_request(chain));
       double refined = 0, farthest = 0;
       for (const auto& p : result.refined) {
         const double d = distance_to_polyline(truth, chain.closed, p.position) / unit;
