@@ -295,6 +295,20 @@ std::vector<char> fit_barriers(const std::vector<Eigen::Vector3d>& P, const Adja
   return barrier;
 }
 
+// CurvatureField::chord: the edges joining two crease vertices without being creases, but on
+// a noisy mesh none between vertices of the runs the fits stop at (`barrier`).
+std::vector<char> mark_chords(const AdjacencyView& adj, const CurvatureField& field, const std::vector<char>& barrier) {
+  const bool noisy = field.noise >= kNoisyCreaseNoise;
+  std::vector<char> chord(adj.neighbors.size(), 0);
+  for (std::uint32_t v = 0; v < field.on_crease.size(); ++v)
+    for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
+      const auto w = adj.neighbors[k];
+      const bool firm_crease_gap = noisy && barrier[v] && barrier[w];
+      chord[k] = field.crease[k] == 0 && field.on_crease[v] && field.on_crease[w] && !firm_crease_gap;
+    }
+  return chord;
+}
+
 // Dihedral angle of every adjacency entry's edge (0 on boundary edges) and the far corners of
 // its two faces (-1 on the boundary).
 struct EdgeAngles {
@@ -613,6 +627,7 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
               field.jet_degree);
     field.timings.jet_ms = lap_ms(clock);
   }
+  field.chord = mark_chords(adjacency, field, barrier);
   SmoothedField smoothed = start_smoothing(field, adjacency);
   if (options.smoothing_passes < 0) {
     field.smoothing_passes = field.noise < kExactSurfaceNoise

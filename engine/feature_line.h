@@ -43,7 +43,7 @@ struct FeatureLineOptions {
   int exact_crease_edges = 2;
   /// Noise (RMS along the normal, local edge lengths) above which crease vertices are no longer
   /// trusted to lie on the true crease and crease runs are refined by the snake.
-  double exact_crease_noise = 0.035;
+  double exact_crease_noise = kNoisyCreaseNoise;
   /// Crease runs on meshes noisier than that are re-fitted along the chain and put back on the
   /// surface (engine/crease_fit.h); bandwidth 0 hands them to the snake like any other piece.
   CreaseFitOptions crease_fit;

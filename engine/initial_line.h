@@ -134,9 +134,8 @@ inline double FeaturePathCost::operator()(std::uint32_t v, std::uint32_t k) {
   // (on skinny CAD triangles the vertex fields are unreliable, a dihedral angle is not).
   const auto crease = mesh_.curvature().crease[k];
   const bool on_crease = crease != 0 && (sign_ == 0 || crease == sign_);
-  // An edge joining two crease vertices without being a crease is a chord across a
-  // face (a CAD cap's long diagonal cutting a rounded corner): no feature at all.
-  const bool chord = !on_crease && mesh_.curvature().on_crease[v] && mesh_.curvature().on_crease[w];
+  // A chord across a face (CurvatureField::chord), or a crease of the other kind: no feature.
+  const bool chord = !on_crease && (crease != 0 || mesh_.curvature().chord[k]);
   const double strength = on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v_ + mesh_.feature_strength(w, sign_));
   return mesh_.neighbor_edge_lengths()[k] * (floor_ + (1 - floor_) * (1 - strength));
 }
