@@ -69,6 +69,7 @@ json feature_line_to_json(const FeatureLineResult& r) {
                              {"reason", p.reason},
                              {"iterations", p.iterations},
                              {"iteration_cap", p.iteration_cap},
+                             {"second_strip", p.second_strip},
                              {"featureless", p.featureless},
                              {"initial_strength", p.initial_strength},
                              {"refined_strength", p.refined_strength}});

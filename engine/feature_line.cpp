@@ -342,6 +342,8 @@ void refine_again_nearer(const LineRun& run, PieceWork& work, FeatureLineResult&
   // spacings off, 0.1% stronger).
   const double needed = work.report.refined_strength * (1 - crest_strength_slack(run.pm));
   if (second.report.kept != PieceKept::refined || !(second.report.refined_strength > needed)) return;
+  second.report.iterations += work.report.iterations;
+  second.report.second_strip = true;
   work = std::move(second);
   result.iterations += tally.iterations;
   result.strip_faces += strip.triangles.size();

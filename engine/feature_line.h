@@ -98,8 +98,11 @@ struct PieceReport {
   std::size_t edges = 0;           ///< initial line edges in it
   PieceKept kept = PieceKept::refined;
   std::string reason;              ///< why the initial line was kept
-  int iterations = 0;              ///< snake iterations
+  int iterations = 0;              ///< snake iterations, on both strips when second_strip
   bool iteration_cap = false;      ///< the snake stopped at its iteration cap, not converged
+  /// Its line is the snake's on a second strip, taken around the vertices nearest the first
+  /// snake's line when that line reached its strip's border (FeatureLineOptions::second_strip).
+  bool second_strip = false;
   /// The strip held no feature (SnakeOptions::featureless_below): the snake only smoothed the
   /// initial line, in at most featureless_iterations
   bool featureless = false;

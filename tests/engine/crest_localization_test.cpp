@@ -162,6 +162,22 @@ TEST(CrestLocalization, ASecondStripOnTheCrestIsKeptWithinTheSlack) {
   EXPECT_LT(largest, 0.1);
 }
 
+TEST(CrestLocalization, ASecondStripSaysSoAndCountsBothSnakes) {
+  // The same sine: its pieces' reports say which line came from a second strip, and their
+  // iterations add up to the line's (the first snake's as well as the second's).
+  const CurvedCrestField sine = make_sine_crest_field(111, 1);
+  const auto mesh = prepare_mesh(sine.field.mesh);
+  FeatureLineRequest request;
+  request.keys = keys_on_curved_crest(sine, {0.0, 0.5, 1.0});
+  const auto result = detect_feature_line(*mesh, request);
+  int iterations = 0, second = 0;
+  for (const auto& piece : result.piece_reports) iterations += piece.iterations, second += piece.second_strip ? 1 : 0;
+  EXPECT_GE(second, 1);
+  EXPECT_EQ(iterations, result.iterations);
+  request.options.second_strip = false;
+  for (const auto& piece : detect_feature_line(*mesh, request).piece_reports) EXPECT_FALSE(piece.second_strip);
+}
+
 TEST(CrestLocalization, CleanCoarseArcKeepsItsLocalisedPieces) {
   // A clean 5k-triangle arc (seed 2): the crest passes between vertices, and a line on it reads a
   // little weaker on the linearly interpolated field than the snake's line through vertices
