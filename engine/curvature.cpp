@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <algorithm>
+#include <cstdlib>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -221,7 +222,9 @@ std::vector<double> fit_all(const std::vector<Eigen::Vector3d>& P, const std::ve
 }
 
 // The crease vertices that bound a jet's neighbourhood (gather): those of crease runs (edges
-// joined at shared vertices) at least kMinBarrierExtent of their mean local edge length across,
+// joined at shared vertices) at least kMinBarrierExtent of their own mean edge length across (on
+// CAD tessellations a crease vertex's other edges are the long sides of skinny faces, several
+// times the crease's: measured by those, a noisy rocker arm's broken crease runs all read short),
 // and of shorter runs within kBarrierRings of a long run of their sign (a crease broken up by
 // noise; beside a convex crease, noise makes short concave runs that are no crease). Noise alone
 // bends a few edges here and there past the crease angle, and a fit stopped at them gathers
@@ -240,7 +243,7 @@ struct CreaseRun {
 char sign_bit(const CreaseRun& run) { return run.sign >= 0 ? 1 : 2; }
 
 std::vector<CreaseRun> crease_runs(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj,
-                                   const CurvatureField& field, const std::vector<double>& local) {
+                                   const CurvatureField& field) {
   std::vector<CreaseRun> runs;
   std::vector<char> in_run(P.size(), 0);
   for (std::uint32_t start = 0; start < P.size(); ++start) {
@@ -249,27 +252,26 @@ std::vector<CreaseRun> crease_runs(const std::vector<Eigen::Vector3d>& P, const 
     run.vertices.assign(1, start);
     in_run[start] = 1;
     Eigen::AlignedBox3d box(P[start]);
-    double edge_sum = 0;
+    double crease_sum = 0;  // each crease edge counted from both ends
+    int crease_count = 0;
     for (std::size_t i = 0; i < run.vertices.size(); ++i) {
       const auto v = run.vertices[i];
       box.extend(P[v]);
-      edge_sum += local[v];
       for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
+        if (field.crease[k] != 0) crease_sum += adj.edge_lengths[k], ++crease_count;
         run.sign += field.crease[k];
         if (field.crease[k] != 0 && !in_run[adj.neighbors[k]])
           in_run[adj.neighbors[k]] = 1, run.vertices.push_back(adj.neighbors[k]);
       }
     }
-    run.is_long = box.diagonal().norm() >= kMinBarrierExtent * edge_sum / double(run.vertices.size());
+    run.is_long = box.diagonal().norm() >= kMinBarrierExtent * crease_sum / crease_count;
     runs.push_back(std::move(run));
   }
   return runs;
 }
 
-std::vector<char> fit_barriers(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, const CurvatureField& field,
-                               const std::vector<double>& local) {
-  const std::vector<CreaseRun> runs = crease_runs(P, adj, field, local);
-  // Flags the vertices within kBarrierRings of the long runs, ring by ring.
+std::vector<char> fit_barriers(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, const CurvatureField& field) {
+  const std::vector<CreaseRun> runs = crease_runs(P, adj, field);
   // Flags the vertices within kBarrierRings of the long runs, ring by ring: 1 near a convex run,
   // 2 near a concave one.
   std::vector<char> near(P.size(), 0);
@@ -603,7 +605,7 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
     for (auto k = adjacency.offsets[v]; k < adjacency.offsets[v + 1]; ++k)
       if (field.crease[k] != 0) on_crease[v] = 1;
   field.timings.creases_ms = lap_ms(clock);
-  const std::vector<char> barrier = fit_barriers(positions, adjacency, field, local);
+  const std::vector<char> barrier = fit_barriers(positions, adjacency, field);
   if (options.method == CurvatureMethod::jet) {
     // Noise: the median residual of fits over two edge lengths (flat and smooth parts fit
     // almost exactly, so what remains is the noise; creases are too few to move a median),
