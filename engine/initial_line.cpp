@@ -58,18 +58,19 @@ double path_length(const PreparedMesh& mesh, const std::vector<std::uint32_t>& p
 }
 
 // Creases steer the marching as they steer the feature path: between two keys on creases, a
-// crease edge out of the current vertex is the feature whatever the curvature ranks say, and an
-// edge joining two crease vertices without being a crease is a chord across a face (on a CAD
-// cap's skinny triangles it cuts the rounded corner). Keeps the crease candidates when there
-// are any, else drops the chords when anything else is left.
+// crease edge out of the current vertex is the feature whatever the curvature ranks say, and a
+// chord across a face (CurvatureField::chord: on a CAD cap's skinny triangles it cuts the
+// rounded corner) is none. Keeps the crease candidates when there are any, else drops the
+// chords when anything else is left.
 void keep_crease_candidates(const PreparedMesh& mesh, std::uint32_t current, std::uint32_t goal,
                             std::vector<std::uint32_t>& candidates) {
   const auto& on_crease = mesh.curvature().on_crease;
   if (on_crease.empty() || !on_crease[current] || !on_crease[goal]) return;
   std::vector<std::uint32_t> creases, others;
   for (auto v : candidates) {
-    if (mesh.is_crease(current, v, 0)) creases.push_back(v);
-    else if (!on_crease[v]) others.push_back(v);
+    const auto k = mesh.edge_slot(current, v);
+    if (mesh.is_crease_slot(k, 0)) creases.push_back(v);
+    else if (!mesh.curvature().chord[k]) others.push_back(v);
   }
   if (!creases.empty()) candidates.swap(creases);
   else if (!others.empty()) candidates.swap(others);
