@@ -4,7 +4,6 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <algorithm>
-#include <cstdlib>
 #include <array>
 #include <atomic>
 #include <cmath>
