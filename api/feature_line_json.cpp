@@ -1,5 +1,6 @@
 #include "api/feature_line_json.h"
 
+#include "api/json_writer.h"
 #include "api/options_table.h"
 
 #include "engine/errors.h"
@@ -9,32 +10,105 @@ namespace {
 
 using nlohmann::json;
 
-json point_json(const Eigen::Vector3d& p) { return json::array({p.x(), p.y(), p.z()}); }
-
-json trace_json(const TraceResult& t) {
-  json ends = json::array(), junctions = json::array();
-  for (const auto& end : t.ends) ends.push_back({{"vertex", end.vertex}, {"reason", to_string(end.reason)}});
-  for (const auto& j : t.junctions) junctions.push_back({{"vertex", j.vertex}, {"branches", j.branches}, {"followed", j.followed}});
-  return {{"key", t.clicked},           {"seed", t.seed},   {"sign", to_string(t.sign)},
-          {"on_crease", t.on_crease},   {"ends", ends},     {"junctions", junctions},
-          {"seed_strength", t.seed_strength}, {"steps", t.steps}, {"ms", t.elapsed_ms}};
+void write_trace(JsonWriter& w, const TraceResult& t) {
+  w.begin_object().member("key", t.clicked).member("seed", t.seed).member("sign", to_string(t.sign));
+  w.member("on_crease", t.on_crease).key("ends").begin_array();
+  for (const auto& end : t.ends) w.begin_object().member("vertex", end.vertex).member("reason", to_string(end.reason)).end_object();
+  w.end_array().key("junctions").begin_array();
+  for (const auto& j : t.junctions)
+    w.begin_object().member("vertex", j.vertex).member("branches", j.branches).member("followed", j.followed).end_object();
+  w.end_array().member("seed_strength", t.seed_strength).member("steps", t.steps).member("ms", t.elapsed_ms).end_object();
 }
 
-json fitted_json(const FittedCurveResult& f) {
-  json points = json::array();
-  for (const auto& p : f.points) points.push_back(point_json(p));
-  return {{"points", points},
-          {"closed", f.closed},
-          {"length", f.length},
-          {"control_points", f.control_points},
-          {"control_spacing", f.control_spacing},
-          {"control_points_per_unit_length", f.control_spacing > 0 ? 1 / f.control_spacing : 0.0},
-          {"corners", f.corners},
-          {"crease_share", f.crease_share},
-          {"surface_share", f.surface_share},
-          {"exact_share", f.exact_share},
-          {"fallback_share", f.fallback_share},
-          {"ms", f.elapsed_ms}};
+void write_fitted(JsonWriter& w, const FittedCurveResult& f) {
+  w.begin_object()
+      .member("points", f.points)
+      .member("closed", f.closed)
+      .member("length", f.length)
+      .member("control_points", f.control_points)
+      .member("control_spacing", f.control_spacing)
+      .member("control_points_per_unit_length", f.control_spacing > 0 ? 1 / f.control_spacing : 0.0)
+      .member("corners", f.corners)
+      .member("crease_share", f.crease_share)
+      .member("surface_share", f.surface_share)
+      .member("exact_share", f.exact_share)
+      .member("fallback_share", f.fallback_share)
+      .member("ms", f.elapsed_ms)
+      .end_object();
+}
+
+void write_initial(JsonWriter& w, const FeatureLineResult& r) {
+  w.begin_object()
+      .member("method", r.trace ? "trace" : to_string(r.initial.method))
+      .member("vertices", r.initial.vertices)
+      .member("points", r.initial_points)
+      .member("length", r.initial.length)
+      .end_object();
+}
+
+void write_refined(JsonWriter& w, const FeatureLineResult& r) {
+  w.begin_object().key("points").begin_array();
+  for (const auto& p : r.refined) w.value(p.position);
+  w.end_array().key("faces").begin_array();
+  for (const auto& p : r.refined) w.value(p.face);
+  w.end_array().key("barycentric").begin_array();
+  for (const auto& p : r.refined) w.begin_array().value(p.barycentric[0]).value(p.barycentric[1]).value(p.barycentric[2]).end_array();
+  w.end_array()
+      .member("length", r.refined_length)
+      .member("key_points", r.key_points)
+      .member("key_moves", r.key_moves)
+      .end_object();
+}
+
+// One object per piece, in line order; "reason" is always present, empty unless the piece kept
+// its initial line (kept: initial).
+void write_piece(JsonWriter& w, const PieceReport& p) {
+  w.begin_object()
+      .member("from", p.from)
+      .member("to", p.to)
+      .member("edges", p.edges)
+      .member("kept", to_string(p.kept))
+      .member("reason", p.reason)
+      .member("iterations", p.iterations)
+      .member("iteration_cap", p.iteration_cap)
+      .member("second_strip", p.second_strip)
+      .member("featureless", p.featureless)
+      .member("initial_strength", p.initial_strength)
+      .member("refined_strength", p.refined_strength)
+      .end_object();
+}
+
+void write_stats(JsonWriter& w, const FeatureLineResult& r) {
+  std::size_t iteration_caps = 0;
+  for (const auto& p : r.piece_reports) iteration_caps += p.iteration_cap ? 1 : 0;
+  w.begin_object()
+      .member("iterations", r.iterations)
+      .member("strip_faces", r.strip_faces)
+      .member("pieces", r.pieces)
+      .member("splits", r.splits)
+      .member("iteration_caps", iteration_caps)
+      .key("pieces_detail")
+      .begin_array();
+  for (const auto& p : r.piece_reports) write_piece(w, p);
+  w.end_array().member("refined", r.refined_by_snake).key("fallbacks").begin_array();
+  for (const auto& f : r.initial.fallbacks)
+    w.begin_object()
+        .member("segment", f.segment)
+        .member("from", to_string(f.from))
+        .member("to", to_string(f.to))
+        .member("reason", f.reason)
+        .end_object();
+  w.end_array()
+      .member("warnings", r.warnings)
+      .key("timings_ms")
+      .begin_object()
+      .member("initial", r.timings.initial_ms)
+      .member("strip", r.timings.strip_ms)
+      .member("flatten", r.timings.flatten_ms)
+      .member("snake", r.timings.snake_ms)
+      .member("total", r.timings.total_ms)
+      .end_object()
+      .end_object();
 }
 
 }  // namespace
@@ -43,74 +117,25 @@ void apply_options_json(const json& j, FeatureLineOptions& o) { apply_options(fe
 
 json options_to_json(const FeatureLineOptions& o) { return options_json(feature_line_option_table(), o); }
 
-json feature_line_to_json(const FeatureLineResult& r) {
-  json initial_points = json::array();
-  for (const auto& p : r.initial_points) initial_points.push_back(point_json(p));
-  json refined_points = json::array(), faces = json::array(), barycentric = json::array();
-  for (const auto& p : r.refined) {
-    refined_points.push_back(point_json(p.position));
-    faces.push_back(p.face);
-    barycentric.push_back(json::array({p.barycentric[0], p.barycentric[1], p.barycentric[2]}));
-  }
-  json key_points = json::array();
-  for (const auto& p : r.key_points) key_points.push_back(point_json(p));
-  json fallbacks = json::array();
-  for (const auto& f : r.initial.fallbacks)
-    fallbacks.push_back({{"segment", f.segment}, {"from", to_string(f.from)}, {"to", to_string(f.to)}, {"reason", f.reason}});
-  // One object per piece, in line order; "reason" is always present, empty unless the piece
-  // kept its initial line (kept: initial).
-  json pieces_detail = json::array();
-  std::size_t iteration_caps = 0;
-  for (const auto& p : r.piece_reports) {
-    pieces_detail.push_back({{"from", p.from},
-                             {"to", p.to},
-                             {"edges", p.edges},
-                             {"kept", to_string(p.kept)},
-                             {"reason", p.reason},
-                             {"iterations", p.iterations},
-                             {"iteration_cap", p.iteration_cap},
-                             {"second_strip", p.second_strip},
-                             {"featureless", p.featureless},
-                             {"initial_strength", p.initial_strength},
-                             {"refined_strength", p.refined_strength}});
-    iteration_caps += p.iteration_cap ? 1 : 0;
-  }
-  json answer = {
-      {"keys", r.keys},
-      {"closed", r.closed},
-      {"initial",
-       {{"method", r.trace ? "trace" : to_string(r.initial.method)},
-        {"vertices", r.initial.vertices},
-        {"points", initial_points},
-        {"length", r.initial.length}}},
-      {"refined",
-       {{"points", refined_points},
-        {"faces", faces},
-        {"barycentric", barycentric},
-        {"length", r.refined_length},
-        {"key_points", key_points},
-        {"key_moves", r.key_moves}}},
-      {"stats",
-       {{"iterations", r.iterations},
-        {"strip_faces", r.strip_faces},
-        {"pieces", r.pieces},
-        {"splits", r.splits},
-        {"iteration_caps", iteration_caps},
-        {"pieces_detail", pieces_detail},
-        {"refined", r.refined_by_snake},
-        {"fallbacks", fallbacks},
-        {"warnings", r.warnings},
-        {"timings_ms",
-         {{"initial", r.timings.initial_ms},
-          {"strip", r.timings.strip_ms},
-          {"flatten", r.timings.flatten_ms},
-          {"snake", r.timings.snake_ms},
-          {"total", r.timings.total_ms}}}}},
-  };
-  if (r.trace) answer["trace"] = trace_json(*r.trace);
-  if (r.fitted) answer["fitted"] = fitted_json(*r.fitted);
-  return answer;
+void write_feature_line(JsonWriter& w, const FeatureLineResult& r) {
+  w.begin_object().member("keys", r.keys).member("closed", r.closed).key("initial");
+  write_initial(w, r);
+  w.key("refined");
+  write_refined(w, r);
+  w.key("stats");
+  write_stats(w, r);
+  if (r.trace) write_trace(w.key("trace"), *r.trace);
+  if (r.fitted) write_fitted(w.key("fitted"), *r.fitted);
+  w.end_object();
 }
+
+std::string feature_line_json_text(const FeatureLineResult& r) {
+  JsonWriter w;
+  write_feature_line(w, r);
+  return w.take();
+}
+
+json feature_line_to_json(const FeatureLineResult& r) { return json::parse(feature_line_json_text(r)); }
 
 json mesh_info_to_json(const PreparedMesh& m, double load_ms) {
   const MeshStatistics& s = m.statistics();

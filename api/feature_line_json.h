@@ -23,6 +23,9 @@ nlohmann::json options_to_json(const FeatureLineOptions& options);
 /// stats.iteration_caps counts the pieces whose snake stopped at its iteration cap.
 nlohmann::json feature_line_to_json(const FeatureLineResult& result);
 
+/// The same answer as JSON text, written without a DOM (what the server sends).
+std::string feature_line_json_text(const FeatureLineResult& result);
+
 /// The prepared mesh's description, as `featureline info` prints it. Its "curvature" object
 /// describes the feature value (the larger |principal curvature|) and the curvature stage:
 /// method, noise, radius, crease_angle, crease_edges (MeshStatistics).

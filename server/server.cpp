@@ -6,6 +6,7 @@
 #include "api/feature_line_json.h"
 #include "api/feature_seeds_json.h"
 #include "api/gltf_export.h"
+#include "api/json_writer.h"
 #include "api/options_table.h"
 #include "api/requests.h"
 #include "api/segmentation_json.h"
@@ -671,11 +672,12 @@ struct FeaturelineServer::Impl {
     } else if (answer != ExportFormat::json) {
       res.set_content(export_lines(results, answer), type);
     } else if (batch) {
-      json out = json::array();
-      for (const auto& r : results) out.push_back(feature_line_to_json(r));
-      write_json(res, 200, {{"lines", out}});
+      JsonWriter answer_text;
+      answer_text.begin_object().key("lines").begin_array();
+      for (const auto& r : results) answer_text.raw(feature_line_json_text(r));
+      res.set_content(answer_text.end_array().end_object().take(), type);
     } else {
-      write_json(res, 200, feature_line_to_json(results[0]));
+      res.set_content(feature_line_json_text(results[0]), type);
     }
   }
 };
