@@ -197,7 +197,10 @@ CrestFit fit_crest(const FitInput& in, const Eigen::Vector2d& p, const Eigen::Ve
     Eigen::Matrix<double, 6, 1> row;
     row << 1, s, s * s, a, a * s, a * a;
     const double w = std::exp(-d2 * inv_two_sigma2);
-    normal_matrix.noalias() += w * row * row.transpose();
+    // The lower triangle only: the LDLT below reads no other.
+    const Eigen::Matrix<double, 6, 1> weighted = w * row;
+    for (int j = 0; j < 6; ++j)
+      for (int i = j; i < 6; ++i) normal_matrix(i, j) += weighted[i] * row[j];
     rhs.noalias() += w * in.field[v] * row;
     ++used;
   });

@@ -427,13 +427,16 @@ void mark_valid_triangles(const PreparedMesh& pm, const FeatureStrip& strip, con
     const Eigen::Vector2d e1 = flat.uv[t[1]] - flat.uv[t[0]], e2 = flat.uv[t[2]] - flat.uv[t[0]];
     const double signed_area = 0.5 * (e1.x() * e2.y() - e1.y() * e2.x());
     if (signed_area > 0) {
-      double distortion = 0;
-      for (int k = 0; k < 3; ++k) {
-        const double length3 = (pm.positions()[strip.vertices[t[k]]] - pm.positions()[strip.vertices[t[(k + 1) % 3]]]).norm();
-        const double length2 = (flat.uv[t[k]] - flat.uv[t[(k + 1) % 3]]).norm();
-        if (length3 > 0) distortion = std::max(distortion, std::abs(length2 / length3 - 1));
+      // |length2 / length3 - 1| <= max_edge_distortion for every edge, compared as squares:
+      // length2^2 within [(1 - d)^2, (1 + d)^2] length3^2 (no square roots).
+      const double low = std::max(0.0, 1 - options.max_edge_distortion), high = 1 + options.max_edge_distortion;
+      bool within = true;
+      for (int k = 0; k < 3 && within; ++k) {
+        const double length3 = (pm.positions()[strip.vertices[t[k]]] - pm.positions()[strip.vertices[t[(k + 1) % 3]]]).squaredNorm();
+        const double length2 = (flat.uv[t[k]] - flat.uv[t[(k + 1) % 3]]).squaredNorm();
+        if (length3 > 0) within = length2 >= low * low * length3 && length2 <= high * high * length3;
       }
-      if (distortion <= options.max_edge_distortion) flat.triangle_valid[ti] = 1;
+      if (within) flat.triangle_valid[ti] = 1;
       else ++flat.distorted_triangles;
       continue;
     }

@@ -39,10 +39,12 @@ void zero_gradient_across_sharp_crests(const FeatureStrip& strip, const FlatStri
       for (int j = 0; j < 3; ++j) {
         if (j == k) continue;
         const auto v = strip.triangles[t][k], w = strip.triangles[t][j];
-        const Eigen::Vector2d d = (flat.uv[w] - flat.uv[v]).normalized();
+        // Beyond 60 degrees from the line on either side: |d.n| > |d| / 2, without a square root.
+        const Eigen::Vector2d d = flat.uv[w] - flat.uv[v];
         const double across = d.dot(normal[v]);
-        if (across > 0.5) highest_left[v] = std::max(highest_left[v], potential[w]);
-        if (across < -0.5) highest_right[v] = std::max(highest_right[v], potential[w]);
+        if (4 * across * across <= d.squaredNorm()) continue;
+        if (across > 0) highest_left[v] = std::max(highest_left[v], potential[w]);
+        else highest_right[v] = std::max(highest_right[v], potential[w]);
       }
   }
   for (std::size_t v = 0; v < nv; ++v) {
