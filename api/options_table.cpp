@@ -213,7 +213,8 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "intersected, a smoothing spline), allowed to leave the noisy surface", "--fitted", &O::fitted,
                 &FittedCurveOptions::enabled),
       option<O>("fitted.radius", within(FittedCurveOptions::radius_range), "Fitted curve: radius of the neighbourhood "
-                "fitted around each point of the line (local edge lengths)", "", &O::fitted, &FittedCurveOptions::radius),
+                "fitted around each point of the line (local edge lengths; a noisy mesh's crease fits reach three "
+                "times as far along the line)", "", &O::fitted, &FittedCurveOptions::radius),
       option<O>("fitted.control_spacing", within(FittedCurveOptions::control_spacing_range), "Fitted curve: distance "
                 "between the spline's control points (the line's mean local edge lengths)", "--fitted-control-spacing",
                 &O::fitted, &FittedCurveOptions::control_spacing),

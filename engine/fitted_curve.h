@@ -38,7 +38,8 @@ struct FittedCurveOptions {
   bool enabled = false;  ///< compute the fitted curve (FeatureLineResult::fitted)
   /// Radius of the neighbourhood fitted around each point of the line, in local edge lengths:
   /// wide enough to average the noise of a few dozen vertices per side, narrow enough that a
-  /// side is nearly planar and a neighbouring feature rarely falls in.
+  /// side is nearly planar and a neighbouring feature rarely falls in. On a noisy mesh a marked
+  /// crease's sides are fitted over a neighbourhood three times as long along the line.
   double radius = 3.0;
   /// Distance between the spline's control points along the line, in the line's mean local
   /// edge length (the answer reports it as control points per unit length).

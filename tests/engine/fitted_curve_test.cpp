@@ -79,12 +79,12 @@ TEST(FittedCurve, NoisyCreaseLeavesTheSurfaceForTheTrueCrease) {
     FeatureLineResult result;
     const Distances d = roof_line(field, noisy, result, distance_to_roof_crease);
     ASSERT_TRUE(result.fitted);
-    // Measured 0.043-0.19 grid spacings (the worst with a false corner at a key), against
-    // 0.24-0.37 for the refined line and 0.28-0.40 for the initial line (0.046-0.17, 0.30-0.40
-    // and 0.34-0.44 while unmarked edges between the crease's vertices were chords).
-    EXPECT_LT(d.fitted, 0.2) << "seed " << seed;
-    EXPECT_LT(d.fitted, 0.5 * d.initial) << "seed " << seed << ": initial " << d.initial;
-    EXPECT_LT(d.fitted, 0.55 * d.refined) << "seed " << seed << ": refined " << d.refined;
+    // Measured 0.036-0.045 grid spacings, against 0.24-0.37 for the refined line and 0.28-0.40
+    // for the initial line (0.043-0.19 while crease fits took a round neighbourhood, the worst
+    // with a false corner at a key).
+    EXPECT_LT(d.fitted, 0.08) << "seed " << seed;
+    EXPECT_LT(d.fitted, 0.25 * d.initial) << "seed " << seed << ": initial " << d.initial;
+    EXPECT_LT(d.fitted, 0.25 * d.refined) << "seed " << seed << ": refined " << d.refined;
     EXPECT_GT(result.fitted->crease_share, 0.9) << "seed " << seed;
   }
 }
@@ -107,13 +107,13 @@ TEST(FittedCurve, ClosedCurvedCreaseIsAClosedCurveOnTheCircle) {
     EXPECT_TRUE(result.fitted->closed);
     const double refined = arc_length_distance(refined_positions(result), true, off_circle).mean / field.spacing;
     const double fitted = arc_length_distance(result.fitted->points, true, off_circle).mean / field.spacing;
-    // Measured 0.006 clean and 0.14 at 10% noise, against 0.28 and 0.45 for the refined line (0.21
-    // at 10% while jet fits also stopped at concave runs the noise makes beside the crease, 0.12
-    // while unmarked edges between the crease's vertices were chords). The noisy curve runs 4.9%
-    // long (1.8%, 2.9% after those changes): its crease points wander across the crease.
+    // Measured 0.006 clean and 0.15 at 10% noise, against 0.28 and 0.45 for the refined line (0.14
+    // with round crease fits, 0.25 with crease fits stretched along the line as far as along a
+    // straight crease). The noisy curve runs 7.0% long (4.9% with round fits): where a stretched
+    // fit is refused the curve keeps the line's own point, which zig-zags across the crease.
     EXPECT_LT(fitted, noise == 0 ? 0.01 : 0.3) << "noise " << noise << ", refined " << refined;
     EXPECT_LT(fitted, (noise == 0 ? 0.1 : 0.6) * refined) << "noise " << noise;
-    EXPECT_NEAR(result.fitted->length, 2 * M_PI * radius, (noise == 0 ? 0.01 : 0.055) * 2 * M_PI * radius) << "noise " << noise;
+    EXPECT_NEAR(result.fitted->length, 2 * M_PI * radius, (noise == 0 ? 0.01 : 0.08) * 2 * M_PI * radius) << "noise " << noise;
   }
 }
 
@@ -181,8 +181,11 @@ TEST(FittedCurve, ShiftGuardFallsBackToTheSurfaceLine) {
   request.options.fitted.max_shift = 1.5;
   const auto free = detect_feature_line(*mesh, request);
   ASSERT_TRUE(guarded.fitted && free.fitted);
+  // Measured: free 0.16 (stretched crease fits refused where the noisy sides stop looking planar
+  // within three radii), guarded 0.63.
   EXPECT_GT(guarded.fitted->fallback_share, 0.3);
-  EXPECT_LT(free.fitted->fallback_share, 0.05);
+  EXPECT_LT(free.fitted->fallback_share, 0.2);
+  EXPECT_GT(guarded.fitted->fallback_share, free.fitted->fallback_share + 0.2);
   EXPECT_NEAR(guarded.fitted->crease_share + guarded.fitted->surface_share + guarded.fitted->exact_share +
                   guarded.fitted->fallback_share,
               1.0, 1e-12);
