@@ -492,25 +492,20 @@ std::pair<Eigen::Vector3d, Source> station_point(const PreparedMesh& pm, Neighbo
   double surface_residual = HUGE_VAL;
   const auto on_surface = surface_point(patch, station.p, surface_residual);
   const bool marked = marked_crease_near(pm, ball, vertices, station.p, radius / 2, sign);
-  const double noise = std::max(pm.curvature().noise, kCleanNoise) * station.edge;
-  // The crease point of a neighbourhood where it is trusted: the two sides fit better than one
-  // smooth surface (clearly so, or at all where the mesh marks crease edges of the line's sign
-  // here: noise blurs the comparison on weak creases), and two planes describe the sides down to
-  // the noise (a tight bend of the crease, or a third face near a corner, leaves residuals the
-  // fit cannot explain).
-  auto trusted_crease = [&](const Patch& sides) -> std::optional<Eigen::Vector3d> {
-    double residual = HUGE_VAL;
-    const auto crease = crease_point(sides, station.p, o, residual);
-    const bool two_sides = residual < (marked ? 1.0 : kCreaseResidualShare) * surface_residual;
-    const bool described = residual <= kResidualPerNoise * noise;
-    if (crease && (station.p - *crease).norm() <= max_shift && two_sides && described) return crease;
-    return std::nullopt;
-  };
   // A clean mesh has no noise to average: its crease points come from the round neighbourhood.
   const bool stretch = marked && pm.curvature().noise >= kCleanMeshNoise;
-  const std::optional<Eigen::Vector3d> crease =
-      trusted_crease(stretch ? stretched_patch(pm, ball, st, i, closed, patch, radius) : patch);
-  if (crease) return {blend_with_line(*crease, station.p, noise), Source::crease};
+  double crease_residual = HUGE_VAL;
+  const auto crease =
+      crease_point(stretch ? stretched_patch(pm, ball, st, i, closed, patch, radius) : patch, station.p, o, crease_residual);
+  // A crease where the two sides fit better than one smooth surface: clearly so, or at all where
+  // the mesh marks crease edges of the line's sign here (noise blurs the comparison on weak creases).
+  const bool two_sides = crease_residual < (marked ? 1.0 : kCreaseResidualShare) * surface_residual;
+  // ... and where two planes describe the sides down to the noise: a tight bend of the crease
+  // within the radius, or a third face near a corner, leaves residuals the fit cannot explain.
+  const double noise = std::max(pm.curvature().noise, kCleanNoise) * station.edge;
+  const bool described = crease_residual <= kResidualPerNoise * noise;
+  if (crease && (station.p - *crease).norm() <= max_shift && two_sides && described)
+    return {blend_with_line(*crease, station.p, noise), Source::crease};
   // A marked crease the planes could not describe is no smooth surface either: keep the line.
   if (!marked && on_surface && (station.p - *on_surface).norm() <= max_shift) return {*on_surface, Source::surface};
   return {station.p, Source::line};
