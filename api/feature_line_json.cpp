@@ -13,7 +13,8 @@ using nlohmann::json;
 void write_trace(JsonWriter& w, const TraceResult& t) {
   w.begin_object().member("key", t.clicked).member("seed", t.seed).member("sign", to_string(t.sign));
   w.member("on_crease", t.on_crease).key("ends").begin_array();
-  for (const auto& end : t.ends) w.begin_object().member("vertex", end.vertex).member("reason", to_string(end.reason)).end_object();
+  for (const auto& end : t.ends)
+    w.begin_object().member("vertex", end.vertex).member("reason", to_string(end.reason)).end_object();
   w.end_array().key("junctions").begin_array();
   for (const auto& j : t.junctions)
     w.begin_object().member("vertex", j.vertex).member("branches", j.branches).member("followed", j.followed).end_object();
@@ -52,7 +53,8 @@ void write_refined(JsonWriter& w, const FeatureLineResult& r) {
   w.end_array().key("faces").begin_array();
   for (const auto& p : r.refined) w.value(p.face);
   w.end_array().key("barycentric").begin_array();
-  for (const auto& p : r.refined) w.begin_array().value(p.barycentric[0]).value(p.barycentric[1]).value(p.barycentric[2]).end_array();
+  for (const auto& p : r.refined)
+    w.begin_array().value(p.barycentric[0]).value(p.barycentric[1]).value(p.barycentric[2]).end_array();
   w.end_array()
       .member("length", r.refined_length)
       .member("key_points", r.key_points)
