@@ -15,10 +15,10 @@ namespace featureline {
 
 class JsonWriter {
  public:
-  JsonWriter& begin_object();
-  JsonWriter& end_object();
-  JsonWriter& begin_array();
-  JsonWriter& end_array();
+  JsonWriter& begin_object() { return open('{'); }
+  JsonWriter& end_object() { return close('}'); }
+  JsonWriter& begin_array() { return open('['); }
+  JsonWriter& end_array() { return close(']'); }
   /// The next member's name, inside an object; its value follows.
   JsonWriter& key(std::string_view name);
 
@@ -56,6 +56,8 @@ class JsonWriter {
 
  private:
   void separate();  ///< the comma before a value or key, unless it opens its container
+  JsonWriter& open(char bracket);
+  JsonWriter& close(char bracket);
 
   std::string out_;
   bool first_ = true;   ///< nothing written yet in the innermost container

@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 
 #include "engine/errors.h"
+#include "engine/internal/geometry.h"
 #include "engine/internal/order_statistics.h"
 #include "engine/internal/strip_walk.h"
 
@@ -48,24 +49,17 @@ std::vector<double> line_bends(const std::vector<StripPoint>& points, const std:
   std::vector<double> bend(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector2d nu = normals[i], t(nu.y(), -nu.x());
-    Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    ParabolaFit fit(baseline);
     auto add = [&](std::size_t j) {
       const Eigen::Vector2d d = points[j].uv - points[i].uv;
       if (d.squaredNorm() > baseline * baseline) return false;
-      const double a = d.dot(t) / baseline, u = d.dot(nu) / baseline;  // scaled: well conditioned
-      const Eigen::Vector3d row(1, a, a * a);
-      normal_matrix.noalias() += row * row.transpose();
-      rhs.noalias() += u * row;
+      fit.add(d.dot(t), d.dot(nu));
       return true;
     };
     add(i);
     for (std::size_t j = i; j-- > 0 && add(j);) {}
     for (std::size_t j = i + 1; j < n && add(j); ++j) {}
-    const Eigen::LDLT<Eigen::Matrix3d> solver(normal_matrix);
-    const Eigen::Vector3d c = solver.solve(rhs);
-    if (solver.info() == Eigen::Success && c.allFinite() && normal_matrix(2, 2) > 1e-3 * normal_matrix(0, 0))
-      bend[i] = 2 * c[2] / baseline;
+    bend[i] = fit.curvature();
   }
   return bend;
 }

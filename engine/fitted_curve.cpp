@@ -10,6 +10,7 @@
 #include <Eigen/Sparse>
 
 #include "engine/errors.h"
+#include "engine/internal/geometry.h"
 #include "engine/internal/order_statistics.h"
 #include "engine/internal/stopwatch.h"
 #include "engine/internal/vertex_map.h"
@@ -408,20 +409,14 @@ Patch make_patch(const PreparedMesh& pm, const std::vector<std::uint32_t>& verti
 }
 
 // The line's curvature at station i in the tangent plane of `frame`, toward frame.across: the
-// parabola s = c0 + c1 t + k t^2 / 2 fitted to the stations within `reach` of arc length (a
-// noisy line's zig-zag averages out over them).
+// parabola fitted to the stations within `reach` of arc length (a noisy line's zig-zag averages
+// out over them).
 double line_bend(const std::vector<Station>& st, std::size_t i, bool closed, const Frame& frame, double reach) {
   const std::size_t n = st.size();
-  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  int count = 0;
+  ParabolaFit fit(reach);
   auto add = [&](const Eigen::Vector3d& q) {
     const Eigen::Vector3d d = q - st[i].p;
-    const double t = d.dot(frame.along);
-    const Eigen::Vector3d basis(1, t, 0.5 * t * t);
-    normal += basis * basis.transpose();
-    rhs += d.dot(frame.across) * basis;
-    ++count;
+    fit.add(d.dot(frame.along), d.dot(frame.across));
   };
   add(st[i].p);
   for (const int step : {-1, 1}) {
@@ -436,9 +431,7 @@ double line_bend(const std::vector<Station>& st, std::size_t i, bool closed, con
       add(st[at].p);
     }
   }
-  if (count < 5) return 0;
-  const Eigen::Vector3d c = normal.ldlt().solve(rhs);
-  return c.allFinite() ? c[2] : 0;
+  return fit.curvature();
 }
 
 // The neighbourhood of a crease fit at a station: every vertex within kCreaseStretch radii,

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -30,6 +31,32 @@ inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
 
 /// The z component of the 2D cross product: twice the signed area of (0, a, b).
 inline double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+/// A line's bend from points beside it: the least-squares parabola s = c0 + c1 a + c2 a^2 through
+/// points at a along the line's tangent and s across it, both divided by `scale` (a well
+/// conditioned system); its curvature 2 c2 / scale toward +s, 0 when the points do not spread
+/// along the line enough to show one.
+class ParabolaFit {
+ public:
+  explicit ParabolaFit(double scale) : scale_(scale) {}
+  void add(double along, double across) {
+    const double a = along / scale_, u = across / scale_;
+    const Eigen::Vector3d row(1, a, a * a);
+    normal_.noalias() += row * row.transpose();
+    rhs_.noalias() += u * row;
+  }
+  double curvature() const {
+    const Eigen::LDLT<Eigen::Matrix3d> solver(normal_);
+    const Eigen::Vector3d c = solver.solve(rhs_);
+    if (solver.info() == Eigen::Success && c.allFinite() && normal_(2, 2) > 1e-3 * normal_(0, 0)) return 2 * c[2] / scale_;
+    return 0;
+  }
+
+ private:
+  double scale_;
+  Eigen::Matrix3d normal_ = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs_ = Eigen::Vector3d::Zero();
+};
 
 /// The unsigned angle between two vectors, accurate near 0 and pi (atan2, not acos).
 inline double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
