@@ -532,12 +532,9 @@ int smooth_until_noise_is_gone(SmoothedField& s, double tolerance, int max_passe
 // 0.013 -> 0.007 grid spacings, arc at 24,200 0.026 -> 0.016), no noisy or CAD cell moved.
 constexpr double kExactSurfaceNoise = 0.005;
 
-// Each pass spreads a value over about half an edge length squared (variance), so m passes
-// blur over about sqrt(m) / 2 edge lengths. Features are sized relative to the object, not to
-// its edges: keep that blur within 1% of the bounding box's diagonal (a 245k-triangle field
-// allows the full 100 passes, a 5k-triangle one 2), so fine meshes can average much more
-// noise away without erasing what a coarse mesh of the same object would show.
-int blur_limited_passes(const std::vector<Eigen::Vector3d>& P, const std::vector<double>& local) {
+// The bounding box's diagonal in mean local edge lengths: how many edges the object spans, and so
+// how many a feature of a given share of it does. 0 for an empty or degenerate mesh.
+double diagonal_in_edges(const std::vector<Eigen::Vector3d>& P, const std::vector<double>& local) {
   if (P.empty()) return 0;
   Eigen::Vector3d lo = P[0], hi = P[0];
   for (const auto& p : P) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
@@ -546,9 +543,39 @@ int blur_limited_passes(const std::vector<Eigen::Vector3d>& P, const std::vector
   for (double l : local)
     if (l > 0) edge += l, ++count;
   if (count == 0 || !(edge > 0)) return 0;
-  const double blur_edges = 0.01 * (hi - lo).norm() / (edge / double(count));
+  return (hi - lo).norm() / (edge / double(count));
+}
+
+// Each pass spreads a value over about half an edge length squared (variance), so m passes
+// blur over about sqrt(m) / 2 edge lengths. Features are sized relative to the object, not to
+// its edges: keep that blur within 1% of the bounding box's diagonal (a 245k-triangle field
+// allows the full 100 passes, a 5k-triangle one 2), so fine meshes can average much more
+// noise away without erasing what a coarse mesh of the same object would show.
+int blur_limited_passes(double diagonal_edges) {
+  const double blur_edges = 0.01 * diagonal_edges;
   const double passes = 4 * blur_edges * blur_edges;
   return int(std::min<double>(CurvatureLimits::max_smoothing_passes, std::floor(passes)));
+}
+
+// The automatic jet radius (local edge lengths): 2 on clean meshes, growing with the noise up to
+// 6 (wider fits average noise away, the variance of a fitted curvature falling as radius^-6 at
+// a fixed density, but blur features). That cap was measured on objects about 134 edges across
+// (bench_accuracy's 24,200-triangle fields). On a finer mesh of the same object a feature spans
+// more edges, so a noisy mesh's fits reach as much further as the square root of the object's
+// size in edges beyond that: on the 80,000-triangle fields (247 edges across, radius 8.1) every
+// noisy cell but one came nearer over 6 seeds (arc ridge at 20% noise: 0.132 -> 0.114 grid
+// spacings), on the 245,000-triangle ones (425 across, 10.7) 9 of 12 curved cells nearer and 2
+// further by up to 0.005 over 3 seeds; with the cube root, several 30% cells further. Meshes
+// whose estimated noise is below kWideJetMinNoise (clean ones, and scans such as igea at 0.011
+// and the bunny at 0.021) keep radius 2-4, and every object under 134 edges across keeps the
+// cap of 6 (the CAD parts here span 5-100).
+constexpr double kJetCapReferenceEdges = 134;
+constexpr double kWideJetMinNoise = 0.03;
+double automatic_jet_radius(double noise, double diagonal_edges, double probe_radius) {
+  double radius = std::clamp(2 + 100 * noise, probe_radius, 6.0);
+  if (noise >= kWideJetMinNoise && diagonal_edges > kJetCapReferenceEdges)
+    radius = std::min(radius * std::sqrt(diagonal_edges / kJetCapReferenceEdges), CurvatureLimits::max_radius);
+  return radius;
 }
 
 }  // namespace
@@ -583,6 +610,7 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
   field.k_max = field.mean;
   field.k_min = field.mean;
   const std::vector<double> local = local_edge_lengths(adjacency);
+  const double diagonal_edges = diagonal_in_edges(positions, local);
   // Creases: above 30 degrees, and well above the dihedral angles the noise makes on its own.
   if (options.crease_angle >= 0) {
     const EdgeAngles angles = dihedral_angles(mesh, executor);
@@ -617,9 +645,7 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
     residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return r < 0; }), residual.end());
     field.noise = median_of(residual);
     field.timings.noise_ms = lap_ms(clock);
-      // Wider neighbourhoods average noise away (the variance of a fitted curvature falls as
-    // radius^-6 at a fixed density) but blur features; grow the radius with the noise only.
-    field.radius = options.radius > 0 ? options.radius : std::clamp(2 + 100 * field.noise, kProbeRadius, 6.0);
+    field.radius = options.radius > 0 ? options.radius : automatic_jet_radius(field.noise, diagonal_edges, kProbeRadius);
     // The probe's quadrics serve as the field itself when they are what was asked for.
     field.jet_degree = options.jet_degree != JetDegree::automatic ? options.jet_degree : JetDegree::cubic;
     if (field.radius != kProbeRadius || stride != 1 || field.jet_degree != JetDegree::quadric)
@@ -634,7 +660,7 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
     field.smoothing_passes = field.noise < kExactSurfaceNoise
                                  ? 0
                                  : smooth_until_noise_is_gone(smoothed, options.smoothing_tolerance,
-                                                              blur_limited_passes(positions, local), cancel, executor);
+                                                              blur_limited_passes(diagonal_edges), cancel, executor);
   } else {
     for (int pass = 0; pass < options.smoothing_passes; ++pass) {
       throw_if_cancelled(cancel);
