@@ -64,6 +64,14 @@ std::vector<double> line_bends(const std::vector<StripPoint>& points, const std:
   return bend;
 }
 
+// line_bends of the line moved across itself by `offsets` (the crest fits' smoothed offsets).
+std::vector<double> localised_bends(const std::vector<StripPoint>& points, const std::vector<Eigen::Vector2d>& normals,
+                                    const std::vector<double>& offsets, double baseline) {
+  std::vector<StripPoint> localised = points;
+  for (std::size_t i = 0; i < points.size(); ++i) localised[i].uv += offsets[i] * normals[i];
+  return line_bends(localised, normals, baseline);
+}
+
 // The placed strip vertices bucketed in square cells of the fit radius, so a fit visits the 3 x 3
 // cells around its point instead of the whole strip (a 245k-triangle line's strip has thousands).
 class VertexGrid {
@@ -275,13 +283,23 @@ double field_blur_variance(const CurvatureField& field, double h, double h2) {
 }
 
 // The blur is taken out (CrestOptions::unblur) on meshes whose estimated noise (local edge
-// lengths) lies from kNarrowStripMinNoise to this: smoothed fields of noisy meshes, where the blur
-// is several edges wide (bench_accuracy's fields at 10% noise read 0.036-0.037). At 20% (0.071-
-// 0.074) the line's bend over three fit radii follows its wander as much as the crest's, and the
-// correction moved curved cells both ways (24,200-triangle sine ridge 0.098 -> 0.138 grid
-// spacings, 245,000-triangle arc ridge 0.151 -> 0.204). On clean meshes the blur is the radius-2
-// jets' (sigma about 0.66 edges, a shift under 0.02 edges in these bends).
+// lengths) lies from kNarrowStripMinNoise to kBendFrameMaxNoise: smoothed fields of noisy meshes,
+// where the blur is several edges wide (bench_accuracy's fields at 10% noise read 0.036-0.037, at
+// 20% 0.071-0.074). On clean meshes the blur is the radius-2 jets' (sigma about 0.66 edges, a
+// shift under 0.02 edges in these bends). Below this noise the bend is the line's over three fit
+// radii (the bent frame's); from it, the snake's line wanders with the noisy field's crest and
+// its bend over three radii follows the wander as much as the crest (the correction moved 20%
+// cells both ways: 24,200-triangle sine ridge 0.098 -> 0.138 grid spacings), so the bend is read
+// from the localised line (the fits' smoothed offsets applied) over kWanderBendSpan fit radii and
+// shrunk by kWanderBendSlack.
 constexpr double kUnblurMaxNoise = 0.05;
+constexpr double kWanderBendSpan = 6;
+// ... shrunk toward 0 by this over sigma: what a straight crest's localised line still reads
+// as bend at 20% noise. Unshrunk, the straight 245,000-triangle ridge and valley at 20% came
+// out 0.010-0.014 grid spacings further; shrunk by 0.04 / sigma, all 11 curved 20% cells that
+// moved came nearer (arc ridge 80,000: 0.117 -> 0.111; 24,200: 0.103 -> 0.094) and no cell
+// went further (0.02: 4 further by up to 0.004; 0.03: 2).
+constexpr double kWanderBendSlack = 0.04;
 // The blur's width (sigma) times the line's curvature up to which the first-order shift is
 // applied. Beyond it, on the 5,000-triangle arcs (0.13-0.14), the lines lay nearer than the
 // shift predicts (0.02-0.05 grid spacings inside the bend, not 0.15) and the correction put
@@ -391,15 +409,19 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
     if (end) moves[i == 0 ? 0 : 1] = std::abs(s) <= reach;
   }
   std::vector<double> smoothed = smooth_offsets(offsets, o.smoothing_passes);
-  if (o.unblur && noise >= kNarrowStripMinNoise && noise < kUnblurMaxNoise) {
+  if (o.unblur && noise >= kNarrowStripMinNoise && noise < kBendFrameMaxNoise) {
     const double variance = field_blur_variance(mesh.curvature(), h, strip.mean_squared_edge_length);
     const double sigma = std::sqrt(variance);
-    const std::vector<double> line_bend = bent_frame ? bends : line_bends(points, normals, 3 * radius);
+    const bool wandering = noise >= kUnblurMaxNoise;
+    const std::vector<double> line_bend = wandering ? localised_bends(points, normals, smoothed, kWanderBendSpan * radius)
+                                          : bent_frame ? bends
+                                                       : line_bends(points, normals, 3 * radius);
+    const double slack = wandering ? kWanderBendSlack / sigma : 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       const bool end = i == 0 || i + 1 == n;
       if ((end && !moves[i == 0 ? 0 : 1]) || (!end && !std::isfinite(offsets[i]) && smoothed[i] == 0)) continue;
       if (sigma * std::abs(line_bend[i]) <= kUnblurMaxBend && sigma <= kUnblurMaxWidthShare * half_widths[i])
-        smoothed[i] -= kUnblurGain * 0.5 * variance * line_bend[i];
+        smoothed[i] -= kUnblurGain * 0.5 * variance * std::copysign(std::max(0.0, std::abs(line_bend[i]) - slack), line_bend[i]);
     }
   }
   for (std::size_t i = 0; i < n; ++i) {
