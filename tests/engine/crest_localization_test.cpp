@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
 
 #include "engine/feature_line.h"
 #include "tests/support/accuracy_meshes.h"
@@ -25,17 +26,21 @@ CurvedCrestField seed_two_arc(int n, double amplitude) {
   return make_curved_crest_field(options);
 }
 
-// seed_two_arc at 10% noise (RMS, of the grid spacing), and its mean edge length before the noise.
+// A curved crest with noise of `fraction` of its grid spacing (RMS), and its mean edge length
+// before the noise.
 struct NoisyArc {
   CurvedCrestField field;
   double e = 0;
 };
-NoisyArc noisy_seed_two_arc(int n, double amplitude) {
-  NoisyArc arc{seed_two_arc(n, amplitude)};
+NoisyArc with_grid_noise(CurvedCrestField field, double fraction, std::uint64_t seed) {
+  NoisyArc arc{std::move(field)};
   arc.e = mean_edge_length(arc.field.field.mesh);
-  arc.field.field.mesh = with_noise(arc.field.field.mesh, 0.1 * arc.field.field.spacing / arc.e, 1);
+  arc.field.field.mesh = with_noise(arc.field.field.mesh, fraction * arc.field.field.spacing / arc.e, seed);
   return arc;
 }
+
+// seed_two_arc at 10% noise.
+NoisyArc noisy_seed_two_arc(int n, double amplitude) { return with_grid_noise(seed_two_arc(n, amplitude), 0.1, 1); }
 
 // The refined line from keys at the start, middle and end of the curved crest.
 std::vector<Eigen::Vector3d> line_along_arc(const CurvedCrestField& field, const CrestOptions& crest = {}) {
@@ -55,6 +60,16 @@ CrestLineOffsets offsets_along_crest(const CurvedCrestField& field, double e, co
   const auto points = line_along_arc(field, crest);
   return {arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.inward_offset(p.x(), p.y()) / e; }),
           arc_length_distance(points, false, [&](const Eigen::Vector3d& p) { return field.distance(p.x(), p.y()) / e; })};
+}
+
+// offsets_along_crest with the field's blur left in the bends (crest.unblur off) and taken out.
+struct UnblurPair {
+  CrestLineOffsets kept, out;
+};
+UnblurPair with_and_without_unblur(const NoisyArc& arc) {
+  CrestOptions kept_blur;
+  kept_blur.unblur = false;
+  return {offsets_along_crest(arc.field, arc.e, kept_blur), offsets_along_crest(arc.field, arc.e)};
 }
 
 TEST(CrestLocalization, ArcCrestIsNotCutInsideItsBend) {
@@ -124,11 +139,7 @@ TEST(CrestLocalization, UnblurTakesTheSmoothedFieldsBiasOutOfABend) {
   // (sigma^2 / 2R, R = 35 e), and the line with it. crest.unblur (the default) moves it back out.
   for (const double amplitude : {0.3, -0.3}) {
     SCOPED_TRACE(amplitude > 0 ? "ridge" : "valley");
-    const NoisyArc arc = noisy_seed_two_arc(111, amplitude);
-    CrestOptions kept_blur;
-    kept_blur.unblur = false;
-    const auto blurred = offsets_along_crest(arc.field, arc.e, kept_blur);
-    const auto unblurred = offsets_along_crest(arc.field, arc.e);
+    const auto [blurred, unblurred] = with_and_without_unblur(noisy_seed_two_arc(111, amplitude));
     EXPECT_GT(blurred.inward.mean, 0.04);
     EXPECT_LT(std::abs(unblurred.inward.mean), 0.025);
     EXPECT_LT(unblurred.distance.mean, blurred.distance.mean);
@@ -142,9 +153,7 @@ TEST(CrestLocalization, WiderJetsOnAFineNoisyMeshTakeTheLinesNearerTheArc) {
   // against 0.111 with radius-6 jets.
   double automatic = 0, narrow = 0;
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-    CurvedCrestField arc = seed_two_arc(201, 0.3);
-    const double e = mean_edge_length(arc.field.mesh);
-    arc.field.mesh = with_noise(arc.field.mesh, 0.2 * arc.field.spacing / e, seed);
+    const CurvedCrestField arc = with_grid_noise(seed_two_arc(201, 0.3), 0.2, seed).field;
     auto distance_with = [&arc](const PrepareOptions& prepare) {
       const auto mesh = prepare_mesh(arc.field.mesh, prepare);
       FeatureLineRequest request;
@@ -171,13 +180,7 @@ TEST(CrestLocalization, UnblurReadsTheBendOfTheLocalisedLineAtHeavyNoise) {
     SCOPED_TRACE(amplitude > 0 ? "ridge" : "valley");
     double inward_kept = 0, inward_out = 0;
     for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-      CurvedCrestField arc = seed_two_arc(111, amplitude);
-      const double e = mean_edge_length(arc.field.mesh);
-      arc.field.mesh = with_noise(arc.field.mesh, 0.2 * arc.field.spacing / e, seed);
-      CrestOptions kept_blur;
-      kept_blur.unblur = false;
-      const auto blurred = offsets_along_crest(arc, e, kept_blur);
-      const auto unblurred = offsets_along_crest(arc, e);
+      const auto [blurred, unblurred] = with_and_without_unblur(with_grid_noise(seed_two_arc(111, amplitude), 0.2, seed));
       inward_kept += blurred.inward.mean / 3, inward_out += unblurred.inward.mean / 3;
       nearer += (blurred.distance.mean - unblurred.distance.mean) / 6;
     }
@@ -191,13 +194,7 @@ TEST(CrestLocalization, UnblurLeavesABlurAsWideAsTheCrestAlone) {
   // crest profile's half width, where the first-order shift overstates the field's offset (the
   // lines went 0.009 grid spacings further off with it); the lines stay on the field's crest.
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-    CurvedCrestField sine = make_sine_crest_field(51, seed);
-    const double e = mean_edge_length(sine.field.mesh);
-    sine.field.mesh = with_noise(sine.field.mesh, 0.1 * sine.field.spacing / e, seed);
-    CrestOptions kept_blur;
-    kept_blur.unblur = false;
-    const auto blurred = offsets_along_crest(sine, e, kept_blur);
-    const auto unblurred = offsets_along_crest(sine, e);
+    const auto [blurred, unblurred] = with_and_without_unblur(with_grid_noise(make_sine_crest_field(51, seed), 0.1, seed));
     EXPECT_EQ(unblurred.distance.mean, blurred.distance.mean) << "seed " << seed;
   }
 }
