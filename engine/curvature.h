@@ -60,8 +60,8 @@ struct CurvatureOptions {
   JetDegree jet_degree = JetDegree::automatic;
   /// Jet neighbourhood radius in local edge lengths (the mean length of a vertex's edges).
   /// 0 chooses it from the estimated noise: 2 on clean meshes, growing to 6 at heavy noise; on
-  /// noisy meshes (estimated noise 0.03 or more) of objects over 134 edges across, up to 6 times
-  /// the square root of their size in edges over 134 (at most 12).
+  /// noisy meshes (estimated noise 0.03 or more) of objects D > 134 mean edges across (the
+  /// bounding box's diagonal), that radius times sqrt(D / 134), at most 12.
   double radius = 0;
   /// Laplacian passes over the principal curvatures afterwards; each replaces a value by the
   /// mean of itself and its neighbours' mean. -1 chooses them: none on an exact surface (estimated
