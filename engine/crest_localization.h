@@ -48,10 +48,12 @@ struct CrestOptions {
   /// Takes the field's blur out of bends. The jets and smoothing passes that make the field blur
   /// it, which moves the crest of a bent feature into its bend by sigma^2 / (2 R) to first order
   /// (sigma^2: the blur's variance per axis, R: the bend's radius); each point then moves three
-  /// quarters of that out of the line's bend, on meshes whose estimated noise is 0.03-0.05 local
+  /// quarters of that out of the line's bend, on meshes whose estimated noise is 0.03-0.09 local
   /// edge lengths, where the bend is gentle against the blur (sigma / R at most 0.1) and the blur
   /// narrow against the crest (sigma at most 0.75 of the fitted profile's half width), where the
-  /// first-order shift holds (accuracy.md). false: the field's crest is kept.
+  /// first-order shift holds (accuracy.md). From a noise of 0.05 the bend is the localised line's
+  /// over six fit radii, less 0.04 / sigma (what a straight crest's line reads as bend there).
+  /// false: the field's crest is kept.
   bool unblur = true;
 
   static constexpr ValidRange radius_range = closed_range(1, 12);
