@@ -34,6 +34,7 @@ void write_fitted(JsonWriter& w, const FittedCurveResult& f) {
       .member("surface_share", f.surface_share)
       .member("exact_share", f.exact_share)
       .member("fallback_share", f.fallback_share)
+      .member("averaged_share", f.averaged_share)
       .member("ms", f.elapsed_ms)
       .end_object();
 }

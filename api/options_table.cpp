@@ -230,6 +230,10 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
       option<O>("fitted.corner_angle", within(FittedCurveOptions::corner_angle_range), "Fitted curve: the spline is "
                 "split where the line turns by more than this within an edge (degrees)", "", &O::fitted,
                 &FittedCurveOptions::corner_angle),
+      option<O>("fitted.run_averaging", within(FittedCurveOptions::run_averaging_range), "Fitted curve: on a noisy "
+                "mesh's crease runs each point is averaged along the line over the widest window whose estimate "
+                "agrees with every narrower one within this many standard deviations (0: the spline alone)", "",
+                &O::fitted, &FittedCurveOptions::run_averaging),
       option<O>("crest.move_keys", {}, "Crest localisation: keys (and other pinned points) move across the line to the "
                 "crest too, within max_key_shift (false: the line passes through the key vertices)", "--keys-on-vertices",
                 &O::crest, &CrestOptions::move_keys),

@@ -128,6 +128,8 @@ std::vector<Variant> all_variants() {
         o.crest.follow_bend = false;
         o.second_strip = false;
       }),
+      variant("fitted curve: the spline alone (fitted.run_averaging 0)",
+              [](PrepareOptions&, FeatureLineOptions& o) { o.fitted.run_averaging = 0; }),
   };
 }
 
@@ -351,7 +353,7 @@ constexpr double kWorseTolerance = 1e-3;
 struct FittedOutcome {
   bool present = false;
   LineDistance distance;
-  double crease_share = 0, fallback_share = 0, ms = 0;
+  double crease_share = 0, fallback_share = 0, averaged_share = 0, ms = 0;
 };
 
 FittedOutcome measure_fitted(const FeatureLineResult& r, const std::function<double(const Eigen::Vector3d&)>& distance) {
@@ -361,6 +363,7 @@ FittedOutcome measure_fitted(const FeatureLineResult& r, const std::function<dou
   out.distance = arc_length_distance(r.fitted->points, r.fitted->closed, distance);
   out.crease_share = r.fitted->crease_share;
   out.fallback_share = r.fitted->fallback_share;
+  out.averaged_share = r.fitted->averaged_share;
   out.ms = r.fitted->elapsed_ms;
   return out;
 }
@@ -717,20 +720,26 @@ void print_summary(const BenchResults& results, const std::vector<Variant>& vari
   }
 }
 
+// Summed over a variant's noisy CAD lines: the fitted curve's, the initial and the refined line's
+// mean distances.
+struct NoisyCadSums {
+  double fitted = 0, initial = 0, refined = 0;
+  std::size_t lines = 0, worse = 0;
+};
+
 // The fitted curve beside the surface lines, per row: its mean distance, its ratio to the initial
-// and the refined line's, the lines where it is worse than the refined line, and (noisy CAD) the
-// summed ratio to the initial lines.
+// and the refined line's, the lines where it is worse than the refined line, and (noisy CAD, per
+// variant) the summed ratio to the initial lines.
 void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& variants, const std::vector<Case>& cases) {
   std::printf("\n## Fitted curve (fitted.enabled, defaults)\n\n");
   std::printf("| variant | case | noise %% | lines | init mean | ref mean | fitted mean | fitted max | fitted/init | fitted/ref |"
-              " floor | fitted worse than ref | crease share | fallback share | fitted ms |\n");
-  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-  double noisy_cad_fitted = 0, noisy_cad_initial = 0, noisy_cad_refined = 0;
-  std::size_t noisy_cad_lines = 0, noisy_cad_worse = 0;
+              " floor | fitted worse than ref | crease share | fallback share | averaged share | fitted ms |\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::map<std::size_t, NoisyCadSums> noisy_cad;  // by variant
   for (const auto& [key, row] : results.rows) {
     const Case& c = cases[key.case_index];
     const double noise = c.noise_levels[key.noise_index];
-    double initial = 0, refined = 0, fitted = 0, fitted_max = 0, crease = 0, fallback = 0, floor = 0;
+    double initial = 0, refined = 0, fitted = 0, fitted_max = 0, crease = 0, fallback = 0, averaged = 0, floor = 0;
     std::size_t n = 0, worse = 0;
     std::vector<double> ms;
     for (const auto& l : row.lines) {
@@ -738,26 +747,28 @@ void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& 
       ++n;
       initial += l.initial.mean, refined += l.refined.mean, fitted += l.fitted.distance.mean, floor += l.floor;
       fitted_max = std::max(fitted_max, l.fitted.distance.max);
-      crease += l.fitted.crease_share, fallback += l.fitted.fallback_share;
+      crease += l.fitted.crease_share, fallback += l.fitted.fallback_share, averaged += l.fitted.averaged_share;
       worse += l.fitted.distance.mean > l.refined.mean + kWorseTolerance;
       ms.push_back(l.fitted.ms);
     }
     if (n == 0) continue;
-    if (c.group == "cad" && noise > 0)
-      noisy_cad_fitted += fitted, noisy_cad_initial += initial, noisy_cad_refined += refined, noisy_cad_lines += n,
-          noisy_cad_worse += worse;
+    if (c.group == "cad" && noise > 0) {
+      NoisyCadSums& sums = noisy_cad[key.variant_index];
+      sums.fitted += fitted, sums.initial += initial, sums.refined += refined, sums.lines += n, sums.worse += worse;
+    }
     const double k = double(n);
     char floor_text[16] = "-";
     if (row.lines.front().floor >= 0) std::snprintf(floor_text, sizeof floor_text, "%.3f", floor / k);
-    std::printf("| %s | %s | %.0f | %zu | %.3f | %.3f | %.3f | %.3f | %s | %s | %s | %zu | %.2f | %.2f | %.2f |\n",
+    std::printf("| %s | %s | %.0f | %zu | %.3f | %.3f | %.3f | %.3f | %s | %s | %s | %zu | %.2f | %.2f | %.2f | %.2f |\n",
                 variants[key.variant_index].name.c_str(), c.name.c_str(), noise, n, initial / k, refined / k, fitted / k,
                 fitted_max, ratio_text(fitted, initial).c_str(), ratio_text(fitted, refined).c_str(), floor_text, worse,
-                crease / k, fallback / k, median(ms));
+                crease / k, fallback / k, averaged / k, median(ms));
   }
-  if (noisy_cad_lines > 0)
-    std::printf("\nNoisy CAD, all lines (%zu): fitted / initial %s, refined / initial %s, fitted worse than refined %zu\n",
-                noisy_cad_lines, ratio_text(noisy_cad_fitted, noisy_cad_initial).c_str(),
-                ratio_text(noisy_cad_refined, noisy_cad_initial).c_str(), noisy_cad_worse);
+  if (!noisy_cad.empty()) std::printf("\n");
+  for (const auto& [variant, sums] : noisy_cad)
+    std::printf("Noisy CAD, all lines (%zu), %s: fitted / initial %s, refined / initial %s, fitted worse than refined %zu\n",
+                sums.lines, variants[variant].name.c_str(), ratio_text(sums.fitted, sums.initial).c_str(),
+                ratio_text(sums.refined, sums.initial).c_str(), sums.worse);
 }
 
 // Mean over a row's lines of their mean offset into the bend (curved crests).

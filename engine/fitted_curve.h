@@ -16,12 +16,15 @@
 //  - where a fit is ill-conditioned or refused (sides nearly coplanar, too few vertices, residuals
 //    above the noise, a fitted point far from the line, a sharp bend of the line within the
 //    radius) and on exact crease runs of a clean mesh, the surface line's own point is kept.
-// A penalised cubic B-spline (Eilers and Marx's P-spline: uniform knots, a second-difference
-// penalty on the control points, re-weighted against outlying points) is then fitted through
-// those points with a stated spacing of control points, split at corners of the line, and
-// sampled as a polyline. Measured against the truth in docs/accuracy.md#the-fitted-curve: far
-// closer than the surface line where the line lies off a well-sampled crease, about as close as
-// it on noisy CAD parts.
+// On a noisy mesh's crease runs those points are then averaged along the line over windows chosen
+// point by point (engine/line_averaging.h): long where the crease runs straight, short near its
+// bends. A penalised cubic B-spline (Eilers and Marx's P-spline: uniform knots, a second-difference
+// penalty on the control points, re-weighted against outlying points) is fitted through the
+// points with a stated spacing of control points, split at corners of the line, and sampled as a
+// polyline; the averaged points stand as they are (the spline's penalty would round the crease's
+// bends again). Measured against the truth in docs/accuracy.md#the-fitted-curve: far
+// closer than the surface line where the line lies off a well-sampled crease, two thirds of the
+// initial line's distance on noisy CAD parts.
 #pragma once
 
 #include <vector>
@@ -56,6 +59,10 @@ struct FittedCurveOptions {
   /// The spline is split where the line turns by more than this within about an edge
   /// (degrees): a corner of creases is kept, not rounded.
   double corner_angle = 45.0;
+  /// On a noisy mesh's crease runs, each point is averaged along the line over the widest window
+  /// whose estimate agrees with every narrower one within this many of its standard deviations
+  /// (engine/line_averaging.h); 0: the spline alone.
+  double run_averaging = 0.7;
 
   static constexpr ValidRange radius_range = closed_range(1.5, 12);
   static constexpr ValidRange control_spacing_range = closed_range(0.5, 50);
@@ -63,6 +70,7 @@ struct FittedCurveOptions {
   static constexpr ValidRange min_dihedral_range = closed_range(0, 90);
   static constexpr ValidRange max_shift_range = closed_range(0.1, 10);
   static constexpr ValidRange corner_angle_range = closed_range(10, 180);
+  static constexpr ValidRange run_averaging_range = closed_range(0, 10);
 };
 
 /// \throw InvalidInputError naming the first option outside its range.
@@ -82,6 +90,8 @@ struct FittedCurveResult {
   /// exact crease run of a clean mesh kept as it is, and the surface line itself where the fits
   /// were refused or ill-conditioned (the fallback). They sum to 1.
   double crease_share = 0, surface_share = 0, exact_share = 0, fallback_share = 0;
+  /// Share of the curve's points averaged along a noisy mesh's crease run (whatever their source).
+  double averaged_share = 0;
   double elapsed_ms = 0;
 };
 
@@ -93,6 +103,9 @@ struct FittedCurveLine {
   /// Per point, whether it lies on the feature itself (an exact crease run of a clean mesh: the
   /// crease is the mesh's own edges there, and the curve keeps it). Empty: no point is.
   std::vector<char> exact;
+  /// Per point, whether it lies on a crease run of a noisy mesh (re-fitted by engine/crease_fit.h):
+  /// the curve's points there are averaged along the line. Empty: none is.
+  std::vector<char> noisy_crease;
   /// The line's own edge length (its initial line's mean edge), the unit of the stations, the
   /// control points and the fits; local edges can be far longer (a CAD part's long cap
   /// diagonals). 0: the mean local edge length along the line.

@@ -365,9 +365,9 @@ const OptionSpec& spec_named(const std::vector<OptionSpec>& specs, const std::st
 }
 
 TEST(OptionTable, LimitsAreTheEnginesRanges) {
-  // 32 feature-line rows (rings, min_piece_edges, twelve snake options, five crest options, seven
-  // trace options, six fitted-curve options), 3 segmentation, 4 curvature.
-  EXPECT_EQ(expect_limits_inside_engine_ranges(feature_line_option_table()), 32u);
+  // 33 feature-line rows (rings, min_piece_edges, twelve snake options, five crest options, seven
+  // trace options, seven fitted-curve options), 3 segmentation, 4 curvature.
+  EXPECT_EQ(expect_limits_inside_engine_ranges(feature_line_option_table()), 33u);
   EXPECT_EQ(expect_limits_inside_engine_ranges(segmentation_option_table()), 3u);
   EXPECT_EQ(expect_limits_inside_engine_ranges(curvature_option_table()), 4u);
   const auto line = option_specs(feature_line_option_table());
@@ -439,9 +439,9 @@ TEST(OptionTable, EngineAcceptsWhatTheTableAcceptsAndRefusesWhatItsRangeRefuses)
   const auto curvature = options_outside_engine_ranges(curvature_option_table());
   for (const auto& [what, options] : curvature) EXPECT_THROW(check_curvature_options(options), InvalidInputError) << what;
   // Two ends of rings, one of each other line option but the crest's five, the trace's seven and
-  // the fitted curve's six, which have two (max_edges: below 2, and infinity); both ends of the
+  // the fitted curve's seven, which have two (max_edges: below 2, and infinity); both ends of the
   // three segmentation ranges; radius, passes and tolerance at both ends, crease_angle above its maximum.
-  EXPECT_EQ(line.size(), 51u);
+  EXPECT_EQ(line.size(), 53u);
   EXPECT_EQ(segmentation.size(), 6u);
   EXPECT_EQ(curvature.size(), 7u);
 }
