@@ -188,6 +188,9 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "(crease_fit) instead of kept exactly", "", &O::exact_crease_noise),
       option<O>("crease_fit.bandwidth", {0, 20}, "Noisy crease runs: Gaussian width of the fit along the chain (local "
                 "edge lengths; 0: refine them with the snake)", "", &O::crease_fit, &CreaseFitOptions::bandwidth),
+      option<O>("crease_fit.confidence", {0, 10}, "Noisy crease runs: each vertex's fit window is the widest (1 to "
+                "11 local edge lengths) whose estimate agrees with every narrower one within this many standard "
+                "deviations of the noise (0: the fixed bandwidth)", "", &O::crease_fit, &CreaseFitOptions::confidence),
       option<O>("crease_fit.step", {0, 1}, "Noisy crease runs: how far each vertex moves toward the fitted crease "
                 "(0: stays, 1: all the way)", "", &O::crease_fit, &CreaseFitOptions::step),
       option<O>("crease_fit.max_shift", {0, 10}, "Noisy crease runs: a vertex the fit would move further than this "

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/line_averaging.h"
 #include "engine/surface_point.h"
 
 namespace featureline {
@@ -76,6 +77,29 @@ Eigen::Vector3d regress_at(const PreparedMesh& mesh, const std::vector<std::uint
   return coefficients.row(0).transpose();
 }
 
+// Every vertex's estimate of the crease: the regression at the fixed bandwidth, or over windows
+// chosen vertex by vertex (options.confidence > 0); the chain's ends are its pinned keys.
+std::vector<Eigen::Vector3d> crease_estimates(const PreparedMesh& mesh, const std::vector<std::uint32_t>& chain,
+                                              const std::vector<double>& s, const CreaseFitOptions& options) {
+  std::vector<Eigen::Vector3d> estimates(chain.size());
+  if (!(options.confidence > 0)) {
+    for (std::size_t i = 1; i + 1 < chain.size(); ++i)
+      estimates[i] = regress_at(mesh, chain, s, i, options.bandwidth * mesh.local_edge_length(chain[i]));
+    return estimates;
+  }
+  AveragedLineInput line;
+  line.u = s;
+  double unit = 0;
+  for (const auto v : chain) line.points.push_back(mesh.positions()[v]), unit += mesh.local_edge_length(v);
+  unit /= double(chain.size());
+  line.movable.assign(chain.size(), 1);
+  line.movable.front() = line.movable.back() = 0;
+  line.corner.assign(chain.size(), 0);
+  line.unit = unit;
+  line.sigma = mesh.curvature().noise * unit;
+  return average_along_line(line, {options.confidence, 1.0}).points;
+}
+
 }  // namespace
 
 SurfacePoint nearest_surface_point_near(const PreparedMesh& mesh, std::uint32_t v, const Eigen::Vector3d& x) {
@@ -104,11 +128,12 @@ CreaseFitResult fit_noisy_crease(const PreparedMesh& mesh, const std::vector<std
   for (const auto v : chain) result.points.push_back(surface_point_at_vertex(mesh, v));
   if (options.bandwidth <= 0 || chain.size() < 3) return result;
   const std::vector<double> s = arc_lengths(mesh, chain);
+  const std::vector<Eigen::Vector3d> estimates = crease_estimates(mesh, chain, s, options);
   double shift_sum = 0;
   for (std::size_t i = 1; i + 1 < chain.size(); ++i) {
     const double edge = mesh.local_edge_length(chain[i]);
     const Eigen::Vector3d& vertex = mesh.positions()[chain[i]];
-    const Eigen::Vector3d estimate = vertex + options.step * (regress_at(mesh, chain, s, i, options.bandwidth * edge) - vertex);
+    const Eigen::Vector3d estimate = vertex + options.step * (estimates[i] - vertex);
     const SurfacePoint on_surface = nearest_surface_point_near(mesh, chain[i], estimate);
     const double shift = (on_surface.position - mesh.positions()[chain[i]]).norm() / edge;
     if (shift > options.max_shift) {

@@ -8,8 +8,9 @@
 // line 0.97-1.05x the initial line's distance to the true crease). The true crease is a smooth
 // space curve; the noise is independent from vertex to vertex. A local quadratic regression of
 // the chain's positions against arc length (Gaussian weights) averages the noise out along the
-// crease while following its bends without the shrinking bias a plain average has; each vertex
-// moves part way toward it, and the point is then put on the nearest point of the surface near
+// crease while following its bends without the shrinking bias a plain average has (its window
+// chosen vertex by vertex, engine/line_averaging.h: long where the crease runs straight, short
+// near its bends); each vertex moves part way toward it, and the point is then put on the nearest point of the surface near
 // its vertex, because the line must lie on the mesh. That last step sets a floor: the true crease
 // itself lies off the noisy surface (bench_accuracy's "floor" column: 0.72-0.80 of the initial
 // line's distance at 10% noise), so no line on the surface gets much closer than that.
@@ -24,18 +25,26 @@
 namespace featureline {
 
 struct CreaseFitOptions {
-  /// Standard deviation of the Gaussian weights along the chain, in local edge lengths. 0 turns
-  /// the fit off (the chain's vertices are returned as they are).
+  /// Standard deviation of the Gaussian weights along the chain, in local edge lengths, when
+  /// `confidence` is 0. 0 turns the fit off (the chain's vertices are returned as they are).
   double bandwidth = 2.5;
+  /// > 0: each vertex's window is chosen from 1 to 11 local edge lengths as the widest whose
+  /// estimate agrees with every narrower one within this many standard deviations (the mesh's
+  /// noise estimate; engine/line_averaging.h). bench_accuracy, noisy CAD, refined / initial and
+  /// lines worse than their initial line: the fixed bandwidth 0.892 and 9, confidence 0.7 0.896
+  /// and 5, 1 0.886 and 6, 1.5 0.879 and 7 (step 0.5).
+  double confidence = 1.0;
   /// The fit moves a vertex at most this far (local edge lengths); beyond that the chain turns
   /// too sharply for the bandwidth (a crease corner) and the vertex is kept.
   double max_shift = 0.5;
   /// How far each vertex moves toward the fitted crease before it is put back on the surface
   /// (0 stays, 1 goes all the way). The fit has its own error (a few vertices' worth of noise,
   /// and bias where the crease bends within the bandwidth), so the best estimate lies between
-  /// the vertex and the fit: on noisy CAD creases (bench_accuracy) moving half way gave 0.86 of
-  /// the initial line's distance with 12 of 252 lines worse, all the way 0.90 with 33 worse.
-  double step = 0.5;
+  /// the vertex and the fit: on noisy CAD creases (bench_accuracy) with the fixed bandwidth moving
+  /// half way gave 0.86 of the initial line's distance with 12 of 252 lines worse, all the way 0.90
+  /// with 33 worse; with the windows chosen per vertex (confidence 1) 0.5 gave 0.886 and 6 of 189
+  /// lines worse, 0.6 0.878 and 6, 0.75 0.869 and 11, 1 0.874 and 17.
+  double step = 0.6;
   /// A piece is fitted as a crease run when at least this share of its edges are crease edges
   /// (noise unmarks some edges of a true crease: their dihedral angle dips under the threshold;
   /// on the 10%-noisy rocker arm and wing nut, whose creases are near 30 degrees, half of a
