@@ -197,7 +197,7 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "(local edge lengths) stays", "", &O::crease_fit, &CreaseFitOptions::max_shift),
       option<O>("crease_fit.min_crease_share", {0, 1}, "Noisy meshes: a piece with at least this share of crease "
                 "edges is fitted as a crease run", "", &O::crease_fit, &CreaseFitOptions::min_crease_share),
-      option<O>("second_strip", {}, "A piece whose refined line reached its strip's border is refined again on a strip "
+      option<O>("second_strip", {}, "A piece whose refined line reached its strip's outer rings is refined again on a strip "
                 "around the vertices nearest that line (the stronger line kept)", "--one-strip", &O::second_strip),
       option<O>("crest.enabled", {}, "Place the snake's line on the crest of the feature field across it, located "
                 "inside triangles (false: the snake's line as it settles, the paper's)", "--no-crest", &O::crest, &CrestOptions::enabled),

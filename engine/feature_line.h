@@ -26,9 +26,11 @@ struct FeatureLineOptions {
   CrestOptions crest;              ///< sub-edge localisation of the snake's line (stage 3b)
   TraceOptions trace;              ///< how a line from one key follows its feature (engine/trace.h)
   bool refine = true;              ///< false: stop after the initial line
-  /// A piece whose snake line reached its strip's border is refined again on a strip around the
-  /// vertices nearest that line, and the stronger line kept: the initial edge path can cut a
-  /// bend by more than the strip's rings (on fine meshes, up to 12 edges).
+  /// A piece whose snake line reached its strip's outer rings (beyond 85% of them, or past the
+  /// middle of the outermost) is refined again on a strip around the vertices nearest that line,
+  /// and the stronger line kept: the initial edge path can cut a bend by more than the strip's
+  /// rings (on fine meshes, up to 12 edges), and near its border a snake reads a field cut off
+  /// on one side.
   bool second_strip = true;
   /// Interior keys pin the line (the crest localisation may still move it across the line to
   /// the crest: CrestOptions::move_keys)
@@ -101,7 +103,7 @@ struct PieceReport {
   int iterations = 0;              ///< snake iterations, on both strips when second_strip
   bool iteration_cap = false;      ///< the snake stopped at its iteration cap, not converged
   /// Its line is the snake's on a second strip, taken around the vertices nearest the first
-  /// snake's line when that line reached its strip's border (FeatureLineOptions::second_strip).
+  /// snake's line when that line reached its strip's outer rings (FeatureLineOptions::second_strip).
   bool second_strip = false;
   /// The strip held no feature (SnakeOptions::featureless_below): the snake only smoothed the
   /// initial line, in at most featureless_iterations

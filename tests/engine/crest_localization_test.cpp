@@ -226,6 +226,28 @@ TEST(CrestLocalization, ASecondStripSaysSoAndCountsBothSnakes) {
   for (const auto& piece : detect_feature_line(*mesh, request).piece_reports) EXPECT_FALSE(piece.second_strip);
 }
 
+TEST(CrestLocalization, ALineDeepInItsStripIsRefinedAgainAroundIt) {
+  // A clean 245k-triangle arc (seed 3): the initial path of the first piece strays up to 10 grid
+  // spacings inside the bend, and the snake's line on its 8-ring strip settles 7 rings deep, short
+  // of the outermost ring, with two bumps 0.19 and 0.33 grid spacings off the crest. Refined again
+  // on a strip around that line, the piece lies on the crest.
+  CurvedCrestOptions options;
+  options.n = 351;
+  options.seed = 3;
+  const CurvedCrestField arc = make_curved_crest_field(options);
+  const auto mesh = prepare_mesh(arc.field.mesh);
+  FeatureLineRequest request;
+  request.keys = keys_on_curved_crest(arc, {0.0, 0.5, 1.0});
+  const auto result = detect_feature_line(*mesh, request);
+  ASSERT_FALSE(result.piece_reports.empty());
+  EXPECT_TRUE(result.piece_reports.front().second_strip);
+  const auto distance = arc_length_distance(refined_positions(result), false, [&](const Eigen::Vector3d& p) {
+    return arc.distance(p.x(), p.y()) / arc.field.spacing;
+  });
+  EXPECT_LT(distance.max, 0.1);
+  EXPECT_LT(distance.mean, 0.01);
+}
+
 TEST(CrestLocalization, CleanCoarseArcKeepsItsLocalisedPieces) {
   // A clean 5k-triangle arc (seed 2): the crest passes between vertices, and a line on it reads a
   // little weaker on the linearly interpolated field than the snake's line through vertices
