@@ -168,6 +168,7 @@ json mesh_info_to_json(const PreparedMesh& m, double load_ms) {
          {{"p50", s.abs_curvature_p50}, {"p90", s.abs_curvature_p90}, {"p99", s.abs_curvature_p99}}},
         {"method", s.curvature_method},
         {"noise", s.noise},
+        {"noise_length", s.noise_length},
         {"radius", s.curvature_radius},
         {"jet_degree", s.jet_degree.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.jet_degree)},
         {"smoothing_passes", s.curvature_smoothing_passes},

@@ -96,7 +96,7 @@ std::vector<Eigen::Vector3d> crease_estimates(const PreparedMesh& mesh, const st
   line.movable.front() = line.movable.back() = 0;
   line.corner.assign(chain.size(), 0);
   line.unit = unit;
-  line.sigma = mesh.curvature().noise * unit;
+  line.sigma = mesh.curvature().noise_length;
   return average_along_line(line, {options.confidence, 1.0}).points;
 }
 

@@ -122,6 +122,11 @@ struct CurvatureField {
   /// them took a run of noise-marked edges elsewhere (a wing nut's line, 7 edges off its crease).
   std::vector<char> chord;
   double noise = 0;         ///< estimated RMS noise along the normal, in local edge lengths
+  /// The same estimate in length units: a scanner's noise is a length, whatever the triangles'
+  /// size, so where a line's edges are much shorter or longer than the mesh's typical ones
+  /// (a wing nut's creases: 5 times shorter than their vertices' other edges) this is the noise
+  /// its points carry.
+  double noise_length = 0;
   double radius = 0;        ///< jet radius used (local edge lengths); 0 for cotangent
   JetDegree jet_degree = JetDegree::automatic;  ///< the jets fitted (quadric for cotangent, unused)
   int smoothing_passes = 0; ///< Laplacian passes applied to k_max and k_min

@@ -63,6 +63,7 @@ struct MeshStatistics {
   double abs_curvature_p50 = 0, abs_curvature_p90 = 0, abs_curvature_p99 = 0;
   std::string curvature_method;   ///< "jet" or "cotangent"
   double noise = 0;               ///< estimated RMS noise along the normal, in local edge lengths
+  double noise_length = 0;        ///< the same in length units (CurvatureField::noise_length)
   double curvature_radius = 0;    ///< jet radius used, local edge lengths (0: cotangent)
   std::string jet_degree;         ///< "quadric" or "cubic": the jets fitted ("" with cotangent)
   int curvature_smoothing_passes = 0;  ///< Laplacian passes over the principal curvatures

@@ -232,6 +232,22 @@ TEST(PrepareMesh, NoisyFineMeshesFitJetsAsWideAgainstTheObject) {
   EXPECT_DOUBLE_EQ(prepare_mesh(arc.field.mesh, asked)->curvature().radius, 6.0);
 }
 
+// The noise as a length: the same scanner noise on a plane tessellated twice as finely reads the
+// same length (and twice as many local edge lengths), about the per-coordinate sigma (fits over
+// two edge lengths absorb a little of it).
+TEST(PrepareMesh, NoiseIsEstimatedAsALengthWhateverTheEdges) {
+  constexpr double kSigma = 0.004;  // per coordinate, in the plane's units ([-1, 1] square)
+  auto noise_of = [](int n) {
+    const RawMesh plane = featureline::testing::make_plane_grid(n, 0.2, 5);
+    const double e = testing::mean_edge_length(plane);
+    return prepare_mesh(testing::with_noise(plane, kSigma * std::sqrt(3.0) / e, 2))->curvature();
+  };
+  const CurvatureField coarse = noise_of(41), fine = noise_of(81);
+  EXPECT_NEAR(coarse.noise_length / kSigma, 0.85, 0.15);
+  EXPECT_NEAR(fine.noise_length / coarse.noise_length, 1.0, 0.1);
+  EXPECT_NEAR(fine.noise / coarse.noise, 2.0, 0.2);
+}
+
 TEST(PrepareMesh, RefusesWhatCannotFitItsMemoryBound) {
   const RawMesh raw = featureline::testing::make_icosphere(1.0, 4);  // 2,562 vertices, 5,120 triangles
   const std::size_t needed = preparation_bytes_lower_bound(raw.positions.size(), raw.triangles.size());
