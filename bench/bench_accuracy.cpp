@@ -35,7 +35,9 @@
 // refined mean exceeds the initial mean by more than 0.001 units; turn = total turning of the
 // refined line (rad, mean over lines); fallbk = marching fallbacks (segments, summed); iters =
 // snake iterations per line (mean); ms = detect_feature_line's total per line (median); err =
-// lines that threw.
+// lines that threw. The fitted curve's table adds, for CAD chains, how far the truth itself
+// zigzags about a smooth curve (truth_zigzag; a scanned part's chain does, and no smooth curve
+// can follow it), and sums the noisy CAD lines twice: all, and those on smooth creases.
 //
 // usage: bench_accuracy [--seeds N] [--quick] [--variant NAME] [--worst K] [--sizes N,..] [--no-cad]
 //   --sizes N,..    only these field sizes (n x n grids)
@@ -66,6 +68,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Dense>
 
 #include "engine/feature_line.h"
 #include "engine/mesh_io.h"
@@ -157,7 +160,40 @@ struct LineSpec {
   std::vector<std::uint32_t> truth_vertices;
   std::vector<Eigen::Vector3d> truth_points;
   double unit = 1;
+  /// CAD chains: how far the truth itself zigzags (truth_zigzag), in units; -1 otherwise.
+  double zigzag = -1;
 };
+
+/// Mean distance (in units) of each truth vertex from the quadratic through the two vertices on
+/// either side of it (least squares against arc length, the vertex itself left out): near 0 on a
+/// crease that is a smooth curve, however it bends; a scanned part's crease chain that zigzags
+/// about its curve reads that zigzag, which no smooth curve can follow.
+double truth_zigzag(const std::vector<Eigen::Vector3d>& chain, bool closed, double unit) {
+  const std::size_t n = chain.size();
+  if (n < 5) return 0;
+  double sum = 0;
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!closed && (i < 2 || i + 2 >= n)) continue;
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d rhs = Eigen::Matrix3d::Zero();
+    for (const int offset : {-2, -1, 1, 2}) {
+      // Arc length from vertex i along the chain, in units.
+      double t = 0;
+      for (int step = 0; step != offset; step += offset > 0 ? 1 : -1) {
+        const std::size_t a = (i + n + std::size_t(step)) % n, b = (i + n + std::size_t(step + (offset > 0 ? 1 : -1))) % n;
+        t += (offset > 0 ? 1 : -1) * (chain[b] - chain[a]).norm() / unit;
+      }
+      const Eigen::Vector3d basis(1, t, t * t);
+      normal += basis * basis.transpose();
+      rhs += basis * chain[(i + n + std::size_t(offset)) % n].transpose();
+    }
+    const Eigen::Vector3d at_i = normal.ldlt().solve(rhs).row(0).transpose();
+    sum += (at_i - chain[i]).norm() / unit;
+    ++count;
+  }
+  return count > 0 ? sum / double(count) : 0;
+}
 
 /// Mean distance from the truth chain's vertices to the nearest point of the (noisy) surface
 /// around the same vertex: a floor under the mean distance of any line lying on that surface.
@@ -254,6 +290,7 @@ LineSpec chain_line(const RawMesh& mesh, const std::vector<std::uint32_t>& chain
   line.truth_vertices = chain;
   line.truth_points = *truth;
   line.unit = unit;
+  line.zigzag = truth_zigzag(*truth, closed, unit);
   return line;
 }
 
@@ -376,6 +413,7 @@ struct LineOutcome {
   int iterations = 0;
   std::size_t fallbacks = 0;
   double floor = -1;  ///< surface_floor (CAD chains), -1 otherwise
+  double zigzag = -1; ///< LineSpec::zigzag
   FittedOutcome fitted;
   double inward = std::nan("");  ///< curved crests: the refined line's arc-length mean offset into the bend
   bool worse() const { return !failed && refined.mean > initial.mean + kWorseTolerance; }
@@ -594,6 +632,7 @@ LineOutcome run_line(const PreparedMesh& mesh, const LineSpec& spec, const Varia
     out.fallbacks = r.initial.fallbacks.size();
     out.ms = r.timings.total_ms;
     out.floor = surface_floor(mesh, spec);
+    out.zigzag = spec.zigzag;
     out.fitted = measure_fitted(r, spec.distance);
     if (spec.inward) out.inward = arc_length_distance(refined, r.closed, spec.inward).mean;
     if (at.trace) trace_line(at.c.name, at.noise, at.seed, mesh.statistics().noise, r, refined, spec, out.floor);
@@ -725,25 +764,36 @@ struct NoisyCadSums {
   std::size_t lines = 0, worse = 0;
 };
 
+// A truth chain zigzagging less than this (units, truth_zigzag) is a smooth crease: the fandisks',
+// wing nut's and slabs' chains read 0.002-0.021 on average, the rocker arm's (a scanned part) 0.16.
+constexpr double kSmoothTruth = 0.1;
+
 // The fitted curve beside the surface lines, per row: its mean distance, its ratio to the initial
 // and the refined line's, the lines where it is worse than the refined line, and (noisy CAD, per
 // variant) the summed ratio to the initial lines.
 void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& variants, const std::vector<Case>& cases) {
   std::printf("\n## Fitted curve (fitted.enabled, defaults)\n\n");
   std::printf("| variant | case | noise %% | lines | init mean | ref mean | fitted mean | fitted max | fitted/init | fitted/ref |"
-              " floor | fitted worse than ref | crease share | fallback share | averaged share | fitted ms |\n");
-  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-  std::map<std::size_t, NoisyCadSums> noisy_cad;  // by variant
+              " floor | truth zigzag | fitted worse than ref | crease share | fallback share | averaged share | fitted ms |\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::map<std::size_t, NoisyCadSums> noisy_cad, smooth_truth;  // by variant
   for (const auto& [key, row] : results.rows) {
     const Case& c = cases[key.case_index];
     const double noise = c.noise_levels[key.noise_index];
-    double initial = 0, refined = 0, fitted = 0, fitted_max = 0, crease = 0, fallback = 0, averaged = 0, floor = 0;
+    double initial = 0, refined = 0, fitted = 0, fitted_max = 0, crease = 0, fallback = 0, averaged = 0, floor = 0, zigzag = 0;
     std::size_t n = 0, worse = 0;
     std::vector<double> ms;
     for (const auto& l : row.lines) {
       if (l.failed || !l.fitted.present) continue;
       ++n;
       initial += l.initial.mean, refined += l.refined.mean, fitted += l.fitted.distance.mean, floor += l.floor;
+      zigzag += l.zigzag;
+      if (c.group == "cad" && noise > 0 && l.zigzag >= 0 && l.zigzag < kSmoothTruth) {
+        NoisyCadSums& sums = smooth_truth[key.variant_index];
+        sums.fitted += l.fitted.distance.mean, sums.initial += l.initial.mean, sums.refined += l.refined.mean;
+        ++sums.lines;
+        sums.worse += l.fitted.distance.mean > l.refined.mean + kWorseTolerance;
+      }
       fitted_max = std::max(fitted_max, l.fitted.distance.max);
       crease += l.fitted.crease_share, fallback += l.fitted.fallback_share, averaged += l.fitted.averaged_share;
       worse += l.fitted.distance.mean > l.refined.mean + kWorseTolerance;
@@ -755,18 +805,23 @@ void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& 
       sums.fitted += fitted, sums.initial += initial, sums.refined += refined, sums.lines += n, sums.worse += worse;
     }
     const double k = double(n);
-    char floor_text[16] = "-";
+    char floor_text[16] = "-", zigzag_text[16] = "-";
     if (row.lines.front().floor >= 0) std::snprintf(floor_text, sizeof floor_text, "%.3f", floor / k);
-    std::printf("| %s | %s | %.0f | %zu | %.3f | %.3f | %.3f | %.3f | %s | %s | %s | %zu | %.2f | %.2f | %.2f | %.2f |\n",
+    if (row.lines.front().zigzag >= 0) std::snprintf(zigzag_text, sizeof zigzag_text, "%.3f", zigzag / k);
+    std::printf("| %s | %s | %.0f | %zu | %.3f | %.3f | %.3f | %.3f | %s | %s | %s | %s | %zu | %.2f | %.2f | %.2f | %.2f |\n",
                 variants[key.variant_index].name.c_str(), c.name.c_str(), noise, n, initial / k, refined / k, fitted / k,
-                fitted_max, ratio_text(fitted, initial).c_str(), ratio_text(fitted, refined).c_str(), floor_text, worse,
-                crease / k, fallback / k, averaged / k, median(ms));
+                fitted_max, ratio_text(fitted, initial).c_str(), ratio_text(fitted, refined).c_str(), floor_text, zigzag_text,
+                worse, crease / k, fallback / k, averaged / k, median(ms));
   }
   if (!noisy_cad.empty()) std::printf("\n");
-  for (const auto& [variant, sums] : noisy_cad)
-    std::printf("Noisy CAD, all lines (%zu), %s: fitted / initial %s, refined / initial %s, fitted worse than refined %zu\n",
-                sums.lines, variants[variant].name.c_str(), ratio_text(sums.fitted, sums.initial).c_str(),
-                ratio_text(sums.refined, sums.initial).c_str(), sums.worse);
+  auto print_sums = [&](const char* which, const std::map<std::size_t, NoisyCadSums>& by_variant) {
+    for (const auto& [variant, sums] : by_variant)
+      std::printf("Noisy CAD, %s (%zu), %s: fitted / initial %s, refined / initial %s, fitted worse than refined %zu\n", which,
+                  sums.lines, variants[variant].name.c_str(), ratio_text(sums.fitted, sums.initial).c_str(),
+                  ratio_text(sums.refined, sums.initial).c_str(), sums.worse);
+  };
+  print_sums("all lines", noisy_cad);
+  print_sums("lines on smooth creases, truth zigzag < 0.1", smooth_truth);
 }
 
 // Mean over a row's lines of their mean offset into the bend (curved crests).
