@@ -195,6 +195,9 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "(0: stays, 1: all the way)", "", &O::crease_fit, &CreaseFitOptions::step),
       option<O>("crease_fit.max_shift", {0, 10}, "Noisy crease runs: a vertex the fit would move further than this "
                 "(local edge lengths) stays", "", &O::crease_fit, &CreaseFitOptions::max_shift),
+      option<O>("crease_fit.curve_pull", {0, 1}, "Noisy crease runs: how far each point then moves toward the line's "
+                "fitted space curve before it is put back on the surface (0: the crease fit's points)", "", &O::crease_fit,
+                &CreaseFitOptions::curve_pull),
       option<O>("crease_fit.min_crease_share", {0, 1}, "Noisy meshes: a piece with at least this share of crease "
                 "edges is fitted as a crease run", "", &O::crease_fit, &CreaseFitOptions::min_crease_share),
       option<O>("second_strip", {}, "A piece whose refined line reached its strip's outer rings is refined again on a strip "

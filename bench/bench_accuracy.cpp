@@ -133,6 +133,8 @@ std::vector<Variant> all_variants() {
       }),
       variant("fitted curve: the spline alone (fitted.run_averaging 0)",
               [](PrepareOptions&, FeatureLineOptions& o) { o.fitted.run_averaging = 0; }),
+      variant("noisy crease runs pulled toward the fitted curve (crease_fit.curve_pull 0.5)",
+              [](PrepareOptions&, FeatureLineOptions& o) { o.crease_fit.curve_pull = 0.5; }),
   };
 }
 
@@ -760,7 +762,7 @@ void print_summary(const BenchResults& results, const std::vector<Variant>& vari
 // Summed over a variant's noisy CAD lines: the fitted curve's, the initial and the refined line's
 // mean distances.
 struct NoisyCadSums {
-  double fitted = 0, initial = 0, refined = 0;
+  double fitted = 0, initial = 0, refined = 0, above_floor = 0;
   std::size_t lines = 0, worse = 0;
 };
 
@@ -781,6 +783,7 @@ void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& 
     const Case& c = cases[key.case_index];
     const double noise = c.noise_levels[key.noise_index];
     double initial = 0, refined = 0, fitted = 0, fitted_max = 0, crease = 0, fallback = 0, averaged = 0, floor = 0, zigzag = 0;
+    double above_floor = 0;
     std::size_t n = 0, worse = 0;
     std::vector<double> ms;
     for (const auto& l : row.lines) {
@@ -788,9 +791,11 @@ void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& 
       ++n;
       initial += l.initial.mean, refined += l.refined.mean, fitted += l.fitted.distance.mean, floor += l.floor;
       zigzag += l.zigzag;
+      above_floor += l.refined.mean - l.floor;
       if (c.group == "cad" && noise > 0 && l.zigzag >= 0 && l.zigzag < kSmoothTruth) {
         NoisyCadSums& sums = smooth_truth[key.variant_index];
         sums.fitted += l.fitted.distance.mean, sums.initial += l.initial.mean, sums.refined += l.refined.mean;
+        sums.above_floor += l.refined.mean - l.floor;
         ++sums.lines;
         sums.worse += l.fitted.distance.mean > l.refined.mean + kWorseTolerance;
       }
@@ -803,6 +808,7 @@ void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& 
     if (c.group == "cad" && noise > 0) {
       NoisyCadSums& sums = noisy_cad[key.variant_index];
       sums.fitted += fitted, sums.initial += initial, sums.refined += refined, sums.lines += n, sums.worse += worse;
+      sums.above_floor += above_floor;
     }
     const double k = double(n);
     char floor_text[16] = "-", zigzag_text[16] = "-";
@@ -816,9 +822,10 @@ void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& 
   if (!noisy_cad.empty()) std::printf("\n");
   auto print_sums = [&](const char* which, const std::map<std::size_t, NoisyCadSums>& by_variant) {
     for (const auto& [variant, sums] : by_variant)
-      std::printf("Noisy CAD, %s (%zu), %s: fitted / initial %s, refined / initial %s, fitted worse than refined %zu\n", which,
-                  sums.lines, variants[variant].name.c_str(), ratio_text(sums.fitted, sums.initial).c_str(),
-                  ratio_text(sums.refined, sums.initial).c_str(), sums.worse);
+      std::printf("Noisy CAD, %s (%zu), %s: fitted / initial %s, refined / initial %s, fitted worse than refined %zu, "
+                  "refined above the floor %.4f per line\n", which, sums.lines, variants[variant].name.c_str(),
+                  ratio_text(sums.fitted, sums.initial).c_str(), ratio_text(sums.refined, sums.initial).c_str(), sums.worse,
+                  sums.above_floor / double(std::max<std::size_t>(1, sums.lines)));
   };
   print_sums("all lines", noisy_cad);
   print_sums("lines on smooth creases, truth zigzag < 0.1", smooth_truth);

@@ -122,6 +122,67 @@ SurfacePoint nearest_surface_point_near(const PreparedMesh& mesh, std::uint32_t 
   return best;
 }
 
+namespace {
+
+// The nearest point to x of segment `segment` of the polyline (it runs to the next point, the
+// first again after the last).
+Eigen::Vector3d nearest_on_segment(const std::vector<Eigen::Vector3d>& curve, std::size_t segment, const Eigen::Vector3d& x) {
+  const Eigen::Vector3d& a = curve[segment];
+  const Eigen::Vector3d& b = curve[(segment + 1) % curve.size()];
+  const double length2 = (b - a).squaredNorm();
+  const double t = length2 > 0 ? std::clamp((x - a).dot(b - a) / length2, 0.0, 1.0) : 0.0;
+  return a + t * (b - a);
+}
+
+// The point of the curve nearest x, searched from segment `from` (where the point before x on
+// the line found its own) out to both sides while it keeps getting nearer, a few segments past:
+// the line and the curve run side by side, so this is linear in their lengths.
+Eigen::Vector3d nearest_on_curve(const std::vector<Eigen::Vector3d>& curve, bool closed, std::size_t& from,
+                                 const Eigen::Vector3d& x) {
+  constexpr std::size_t kPast = 4;
+  const std::size_t segments = closed ? curve.size() : curve.size() - 1;
+  Eigen::Vector3d best = nearest_on_segment(curve, from, x);
+  double best_distance = (best - x).squaredNorm();
+  std::size_t best_segment = from;
+  for (const int direction : {1, -1}) {
+    std::size_t misses = 0;
+    for (std::size_t step = 1; step < segments && misses <= kPast; ++step) {
+      const std::ptrdiff_t raw = std::ptrdiff_t(from) + direction * std::ptrdiff_t(step);
+      if (!closed && (raw < 0 || raw >= std::ptrdiff_t(segments))) break;
+      const std::size_t segment = std::size_t((raw % std::ptrdiff_t(segments) + std::ptrdiff_t(segments)) % std::ptrdiff_t(segments));
+      const Eigen::Vector3d p = nearest_on_segment(curve, segment, x);
+      const double distance = (p - x).squaredNorm();
+      if (distance < best_distance) best_distance = distance, best = p, best_segment = segment, misses = 0;
+      else ++misses;
+    }
+  }
+  from = best_segment;
+  return best;
+}
+
+}  // namespace
+
+void pull_toward_curve(const PreparedMesh& mesh, const std::vector<Eigen::Vector3d>& curve, bool closed,
+                       const std::vector<char>& pullable, double pull, std::vector<SurfacePoint>& points) {
+  if (!(pull > 0) || curve.size() < 2) return;
+  std::size_t segment = 0;
+  bool started = false;
+  for (std::size_t i = 0; i < points.size() && i < pullable.size(); ++i) {
+    if (!pullable[i]) continue;
+    const SurfacePoint& p = points[i];
+    if (!started) {  // the first point's segment from all of them; the rest walk from there
+      double best = HUGE_VAL;
+      for (std::size_t s = 0; s + (closed ? 0 : 1) < curve.size(); ++s)
+        if (const double d = (nearest_on_segment(curve, s, p.position) - p.position).squaredNorm(); d < best) best = d, segment = s;
+      started = true;
+    }
+    const Eigen::Vector3d target = p.position + pull * (nearest_on_curve(curve, closed, segment, p.position) - p.position);
+    const auto& corners = mesh.triangles()[p.face];
+    const auto nearest = std::max_element(p.barycentric.begin(), p.barycentric.end()) - p.barycentric.begin();
+    points[i] = nearest_surface_point_near(mesh, corners[std::size_t(nearest)], target);
+  }
+}
+
 CreaseFitResult fit_noisy_crease(const PreparedMesh& mesh, const std::vector<std::uint32_t>& chain,
                                  const CreaseFitOptions& options) {
   CreaseFitResult result;

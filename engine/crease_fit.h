@@ -53,6 +53,19 @@ struct CreaseFitOptions {
   /// left 9 at the same 0.85 ratio; 0.1 and 0 gave back accuracy (0.86, 0.90). Smooth fields
   /// are unchanged (their pieces have no crease edges of the line's sign).
   double min_crease_share = 0.25;
+  /// How far each interior point of a noisy crease run then moves toward the line's fitted space
+  /// curve (engine/fitted_curve.h: crease points where two planes fit the sides, averaged along
+  /// the line) before it is put on the nearest point of the surface around its vertex again; 0
+  /// keeps the crease fit's points. The curve, drawn from the whole neighbourhood rather than
+  /// the run's own vertices, lies nearer the true crease than the run (bench_accuracy, noisy
+  /// CAD: 0.51-0.63 of the initial line's distance on smooth creases); the surface point nearest
+  /// it is then nearer the floor (the true crease's own distance to the noisy surface). Noisy
+  /// CAD, distance above the floor per line: 0 0.0160 units, 0.3 0.0138, 0.5 0.0133, 0.7
+  /// 0.0130, with lines worse than their initial line 6, 9, 11, 11. Off by default: it costs the
+  /// fitted curve on every line with a noisy crease run, asked for or not, and scans have many
+  /// (bench_pipeline medians at 0.5: noisy CAD lines 0.2 -> 7 ms, the armadillo's random lines
+  /// 0.8 -> 10 ms, the dragon's 1.2 -> 14 ms).
+  double curve_pull = 0;
 };
 
 struct CreaseFitResult {
@@ -66,6 +79,13 @@ struct CreaseFitResult {
 /// it onto the surface. The ends stay on the chain's end vertices (they are pinned keys).
 CreaseFitResult fit_noisy_crease(const PreparedMesh& mesh, const std::vector<std::uint32_t>& chain,
                                  const CreaseFitOptions& options = {});
+
+/// Moves each point of `points` marked in `pullable` the share `pull` of the way toward the
+/// nearest point of the polyline `curve` (closed: its last point joins its first), and then onto
+/// the nearest point of the surface around the vertex the point lies nearest (CreaseFitOptions::
+/// curve_pull). Both follow the same line in the same order.
+void pull_toward_curve(const PreparedMesh& mesh, const std::vector<Eigen::Vector3d>& curve, bool closed,
+                       const std::vector<char>& pullable, double pull, std::vector<SurfacePoint>& points);
 
 /// The point of the triangles around `v` (the faces of v and of its neighbours) nearest to `x`.
 SurfacePoint nearest_surface_point_near(const PreparedMesh& mesh, std::uint32_t v, const Eigen::Vector3d& x);

@@ -558,15 +558,30 @@ void trace_initial_line(const PreparedMesh& pm, const FeatureLineRequest& reques
   for (auto i : result.initial.key_indices) result.keys.push_back(result.initial.vertices[i]);
 }
 
-// The space curve beside the surface line, when asked for (engine/fitted_curve.h); `exact` and
-// `noisy_crease` mark the refined points of exact and of noisy crease runs (empty: none).
-void fit_curve_when_asked(const PreparedMesh& pm, const FeatureLineOptions& options, double feature_sign,
-                          std::vector<char> exact, std::vector<char> noisy_crease, FeatureLineResult& result) {
-  if (!options.fitted.enabled) return;
+// The space curve beside the surface line (engine/fitted_curve.h); `exact` and `noisy_crease`
+// mark the refined points of exact and of noisy crease runs (empty: none).
+FittedCurveResult fit_curve(const PreparedMesh& pm, const FeatureLineOptions& options, double feature_sign,
+                            std::vector<char> exact, std::vector<char> noisy_crease, const FeatureLineResult& result) {
   FittedCurveLine line{result.refined, result.closed, feature_sign, std::move(exact), std::move(noisy_crease), 0};
   const std::size_t edges = result.initial.vertices.size() - (result.closed ? 0 : 1);
   if (edges > 0) line.edge_length = result.initial.length / double(edges);
-  result.fitted = fit_feature_curve(pm, line, options.fitted);
+  return fit_feature_curve(pm, line, options.fitted);
+}
+
+// The curve when asked for, and the refined points inside noisy crease runs pulled toward it
+// (CreaseFitOptions::curve_pull), which needs it whether asked for or not. The curve is fitted
+// beside the crease fit's line, so it is the same either way.
+void fit_curve_and_pull_creases(const PreparedMesh& pm, const FeatureLineOptions& options, double feature_sign,
+                                std::vector<char> exact, std::vector<char> noisy_crease, const std::vector<char>& pullable,
+                                FeatureLineResult& result) {
+  const bool pull = options.crease_fit.curve_pull > 0 && std::find(pullable.begin(), pullable.end(), 1) != pullable.end();
+  if (!options.fitted.enabled && !pull) return;
+  FittedCurveResult curve = fit_curve(pm, options, feature_sign, std::move(exact), std::move(noisy_crease), result);
+  if (pull) {
+    pull_toward_curve(pm, curve.points, curve.closed, pullable, options.crease_fit.curve_pull, result.refined);
+    result.refined_length = polyline_length(result.refined, result.closed);
+  }
+  if (options.fitted.enabled) result.fitted = std::move(curve);
 }
 
 // Where the refined line passes each key (its pin, or the refined point nearest an unpinned
@@ -605,6 +620,7 @@ struct PieceJoin {
   std::vector<std::size_t> crease_pins;
   std::vector<char> exact;  ///< per refined point: on an exact crease run (the fitted curve keeps those)
   std::vector<char> noisy_crease;  ///< per refined point: on a noisy mesh's crease run (the fitted curve averages those)
+  std::vector<char> pullable;      ///< per refined point: inside a noisy crease run, not its ends (CreaseFitOptions::curve_pull)
 };
 
 // One pinned piece's parts finished in line order and appended to the refined line.
@@ -625,10 +641,11 @@ void finish_pieces(const LineRun& run, SnakedPieces& group, PieceJoin& join, Fea
     std::vector<SurfacePoint>& refined = result.refined;
     const std::size_t first = refined.empty() ? 0 : 1;
     refined.insert(refined.end(), work.points.begin() + std::ptrdiff_t(first), work.points.end());
-    if (run.options.fitted.enabled) {
-      join.exact.resize(refined.size(), work.piece.exact);
-      join.noisy_crease.resize(refined.size(), work.piece.noisy_crease);
-    }
+    join.exact.resize(refined.size(), work.piece.exact);
+    join.noisy_crease.resize(refined.size(), work.piece.noisy_crease);
+    join.pullable.resize(refined.size(), work.piece.noisy_crease);
+    join.pullable.back() = 0;                 // the piece's end: a pin the next piece starts from
+    if (first == 0) join.pullable.front() = 0;  // the line's first point: a pin as well
   }
 }
 
@@ -658,14 +675,14 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
     result.refined_length = polyline_length(result.refined, closed);
     report_key_points(pm, line, Pins(line.vertices.size(), closed), result);
     result.timings.total_ms = ms_since(start);
-    fit_curve_when_asked(pm, options, line_context(pm, request, result).feature_sign, {}, {}, result);
+    if (options.fitted.enabled) result.fitted = fit_curve(pm, options, line_context(pm, request, result).feature_sign, {}, {}, result);
     return result;
   }
 
   std::vector<Piece> pieces = pinned_pieces(line, options.pin_interior_keys, closed, result.warnings);
   const LineContext context = line_context(pm, request, result);
   mark_crease_pieces(pm, options, line.vertices, context, pieces);
-  PieceJoin join{Pins(line.vertices.size(), closed), crease_pins_of(pieces, closed, line.vertices.size()), {}, {}};
+  PieceJoin join{Pins(line.vertices.size(), closed), crease_pins_of(pieces, closed, line.vertices.size()), {}, {}, {}};
   const LineRun run{pm, options, context, request.cancel, line.vertices};
   // As many pieces at a time as the executor has participants: their strips and snakes are held
   // until their turn, so a line of many keys holds no more than that many at once.
@@ -680,12 +697,15 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   }
   std::vector<SurfacePoint>& refined = result.refined;
   if (closed && refined.size() > 1) refined.pop_back();  // back at the first key
-  std::vector<char> exact = std::move(join.exact), noisy_crease = std::move(join.noisy_crease);
-  if (!exact.empty()) exact.resize(refined.size()), noisy_crease.resize(refined.size());
+  join.exact.resize(refined.size()), join.noisy_crease.resize(refined.size()), join.pullable.resize(refined.size());
   report_key_points(pm, line, join.pins, result);
   result.refined_length = polyline_length(refined, closed);
   result.timings.total_ms = ms_since(start);
-  fit_curve_when_asked(pm, options, context.feature_sign, std::move(exact), std::move(noisy_crease), result);
+  fit_curve_and_pull_creases(pm, options, context.feature_sign, std::move(join.exact), std::move(join.noisy_crease),
+                             join.pullable, result);
+  // The pull made the curve part of the refined line's work.
+  if (options.crease_fit.curve_pull > 0 && std::find(join.pullable.begin(), join.pullable.end(), 1) != join.pullable.end())
+    result.timings.total_ms = ms_since(start);
   return result;
 }
 

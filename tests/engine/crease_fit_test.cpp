@@ -151,5 +151,35 @@ TEST(CreaseFit, NearestSurfacePointNearAVertexIsItsProjectionOntoTheTop) {
   EXPECT_LT((from_barycentric - s.position).norm(), 1e-12);
 }
 
+TEST(CreaseFit, PointsPulledTowardACurveMoveThatShareAndStayOnTheSurface) {
+  // The straight side x = +a of the clean slab's top outline, and a curve a third of an edge
+  // inside the top face beside it: pulled half way, the marked points land a sixth of an edge
+  // inside, on the top (z = h); the unmarked ones do not move.
+  const CadPart part = fine_slab();
+  const auto mesh = prepare_mesh(part.mesh);
+  const auto chain = outline_run(part, 0, 12);
+  const double e = part.mean_edge_length;
+  std::vector<SurfacePoint> points;
+  std::vector<Eigen::Vector3d> curve;
+  for (auto v : chain) {
+    points.push_back(surface_point_at_vertex(*mesh, v));
+    curve.push_back(mesh->positions()[v] - Eigen::Vector3d(e / 3, 0, 0));
+  }
+  std::vector<char> pullable(chain.size(), 1);
+  pullable.front() = pullable.back() = pullable[5] = 0;
+  std::vector<SurfacePoint> pulled = points;
+  pull_toward_curve(*mesh, curve, false, pullable, 0.5, pulled);
+  for (std::size_t i = 0; i < chain.size(); ++i) {
+    const Eigen::Vector3d& vertex = mesh->positions()[chain[i]];
+    if (!pullable[i]) {
+      EXPECT_EQ(pulled[i].position, points[i].position) << "point " << i;
+      continue;
+    }
+    EXPECT_NEAR(pulled[i].position.x(), vertex.x() - e / 6, 1e-9) << "point " << i;
+    EXPECT_NEAR(pulled[i].position.y(), vertex.y(), 1e-9) << "point " << i;
+    EXPECT_NEAR(pulled[i].position.z(), 0.4, 1e-12) << "point " << i;
+  }
+}
+
 }  // namespace
 }  // namespace featureline

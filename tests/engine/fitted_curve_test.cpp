@@ -155,6 +155,48 @@ TEST(FittedCurve, NoisyCreaseRunsAreAveragedAlongTheLine) {
   }
 }
 
+TEST(FittedCurve, NoisyCreaseRunsOfTheSurfaceLineArePulledTowardTheCurve) {
+  // The fine slab's top outline at 10% noise again: asked to (crease_fit.curve_pull 0.5), the
+  // surface line's points inside its crease runs move half way to the fitted curve and back onto
+  // the surface, nearer the outline than the crease fit's own points; the keys' points and the
+  // curve itself are the same with or without the pull, and so is the line whether the curve is
+  // asked for or not.
+  RoundedSlabOptions options;
+  options.tessellation = SlabTessellation::fine;
+  const CadPart part = make_rounded_slab(options);
+  const std::vector<Eigen::Vector3d> outline = positions_of(part.mesh, part.top_outline);
+  const std::size_t n = outline.size();
+  double outline_edge = 0;
+  for (std::size_t i = 0; i < n; ++i) outline_edge += (outline[(i + 1) % n] - outline[i]).norm() / double(n);
+  auto off_outline = [&](const Eigen::Vector3d& p) { return distance_to_polyline(outline, true, p) / outline_edge; };
+  double with_sum = 0, without_sum = 0;
+  for (std::uint64_t seed : {1, 2, 3}) {
+    const auto mesh = prepare_mesh(with_noise(part.mesh, 0.1 * outline_edge / part.mean_edge_length, seed));
+    FeatureLineRequest request;
+    for (std::size_t k = 0; k < 4; ++k) request.keys.push_back(part.top_outline[k * n / 4]);
+    request.closed = true;
+    request.options.fitted.enabled = true;
+    request.options.crease_fit.curve_pull = 0.5;
+    const auto pulled = detect_feature_line(*mesh, request);
+    request.options.fitted.enabled = false;
+    const auto pulled_without_curve = detect_feature_line(*mesh, request);
+    request.options.fitted.enabled = true;
+    request.options.crease_fit.curve_pull = 0;
+    const auto crease_fit_only = detect_feature_line(*mesh, request);
+    ASSERT_TRUE(pulled.fitted && crease_fit_only.fitted);
+    EXPECT_FALSE(pulled_without_curve.fitted);
+    const double with = arc_length_distance(refined_positions(pulled), true, off_outline).mean;
+    const double without = arc_length_distance(refined_positions(crease_fit_only), true, off_outline).mean;
+    // Measured 0.049, 0.046, 0.057 outline edges pulled; 0.052, 0.047, 0.061 without.
+    EXPECT_LT(with, without) << "seed " << seed;
+    with_sum += with, without_sum += without;
+    EXPECT_EQ(refined_positions(pulled), refined_positions(pulled_without_curve)) << "seed " << seed;
+    EXPECT_EQ(pulled.key_points, crease_fit_only.key_points) << "seed " << seed;
+    EXPECT_EQ(pulled.fitted->points, crease_fit_only.fitted->points) << "seed " << seed;
+  }
+  EXPECT_LT(with_sum, 0.97 * without_sum);  // 0.957 measured
+}
+
 TEST(FittedCurve, ShortCreaseEdgesAreAveragedOverTheNoiseAsALength) {
   // A wing nut crease whose edges are 5 times shorter than their vertices' other edges, at 10%
   // noise (RMS displacement in the mesh's mean edges, as bench_accuracy): its points carry noise
