@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 
 #include "api/feature_line_json.h"
 #include "engine/errors.h"
@@ -121,31 +122,52 @@ TEST(FittedCurve, ClosedCurvedCreaseIsAClosedCurveOnTheCircle) {
   }
 }
 
-TEST(FittedCurve, NoisyCreaseRunsAreAveragedAlongTheLine) {
-  // The finely tessellated rounded slab's top outline as a closed line at 10% noise (RMS
-  // displacement in outline edges): its straight sides are crease runs whose points are averaged
-  // along the line, over long windows there and short ones near the rounded corners.
-  RoundedSlabOptions options;
-  options.tessellation = SlabTessellation::fine;
-  const CadPart part = make_rounded_slab(options);
-  const std::vector<Eigen::Vector3d> outline = positions_of(part.mesh, part.top_outline);
-  const std::size_t n = outline.size();
+// The finely tessellated rounded slab's top outline as a closed line (4 keys, the fitted curve
+// asked for), at 10% noise (RMS displacement in outline edges) for seeds 1-3.
+struct NoisySlabOutline {
+  CadPart part;
+  std::vector<Eigen::Vector3d> outline;
   double outline_edge = 0;
-  for (std::size_t i = 0; i < n; ++i) outline_edge += (outline[(i + 1) % n] - outline[i]).norm() / double(n);
-  auto off_outline = [&](const Eigen::Vector3d& p) { return distance_to_polyline(outline, true, p) / outline_edge; };
+
+  NoisySlabOutline() {
+    RoundedSlabOptions options;
+    options.tessellation = SlabTessellation::fine;
+    part = make_rounded_slab(options);
+    outline = positions_of(part.mesh, part.top_outline);
+    for (std::size_t i = 0; i < outline.size(); ++i)
+      outline_edge += (outline[(i + 1) % outline.size()] - outline[i]).norm() / double(outline.size());
+  }
+  // Distance to the clean outline, in outline edges.
+  double off_outline(const Eigen::Vector3d& p) const { return distance_to_polyline(outline, true, p) / outline_edge; }
+  double mean_off_outline(const std::vector<Eigen::Vector3d>& line) const {
+    return arc_length_distance(line, true, [this](const Eigen::Vector3d& p) { return off_outline(p); }).mean;
+  }
+  std::shared_ptr<const PreparedMesh> noisy(std::uint64_t seed) const {
+    return prepare_mesh(with_noise(part.mesh, 0.1 * outline_edge / part.mean_edge_length, seed));
+  }
+  FeatureLineRequest request() const {
+    FeatureLineRequest r;
+    for (std::size_t k = 0; k < 4; ++k) r.keys.push_back(part.top_outline[k * outline.size() / 4]);
+    r.closed = true;
+    r.options.fitted.enabled = true;
+    return r;
+  }
+};
+
+TEST(FittedCurve, NoisyCreaseRunsAreAveragedAlongTheLine) {
+  // The slab's noisy outline: its straight sides are crease runs whose points are averaged along
+  // the line, over long windows there and short ones near the rounded corners.
+  const NoisySlabOutline slab;
   for (std::uint64_t seed : {1, 2, 3}) {
-    const auto mesh = prepare_mesh(with_noise(part.mesh, 0.1 * outline_edge / part.mean_edge_length, seed));
-    FeatureLineRequest request;
-    for (std::size_t k = 0; k < 4; ++k) request.keys.push_back(part.top_outline[k * n / 4]);
-    request.closed = true;
-    request.options.fitted.enabled = true;
+    const auto mesh = slab.noisy(seed);
+    FeatureLineRequest request = slab.request();
     const auto averaged = detect_feature_line(*mesh, request);
     request.options.fitted.run_averaging = 0;
     const auto spline_only = detect_feature_line(*mesh, request);
     ASSERT_TRUE(averaged.fitted && spline_only.fitted);
-    const double initial = arc_length_distance(averaged.initial_points, true, off_outline).mean;
-    const double with = arc_length_distance(averaged.fitted->points, true, off_outline).mean;
-    const double without = arc_length_distance(spline_only.fitted->points, true, off_outline).mean;
+    const double initial = slab.mean_off_outline(averaged.initial_points);
+    const double with = slab.mean_off_outline(averaged.fitted->points);
+    const double without = slab.mean_off_outline(spline_only.fitted->points);
     // Measured 0.041-0.046 outline edges averaged (0.70-0.75 of the initial line's distance), the
     // spline alone 0.046-0.052, with 0.68-0.69 of the points averaged.
     EXPECT_GT(averaged.fitted->averaged_share, 0.3) << "seed " << seed;
@@ -161,21 +183,11 @@ TEST(FittedCurve, NoisyCreaseRunsOfTheSurfaceLineArePulledTowardTheCurve) {
   // the surface, nearer the outline than the crease fit's own points; the keys' points and the
   // curve itself are the same with or without the pull, and so is the line whether the curve is
   // asked for or not.
-  RoundedSlabOptions options;
-  options.tessellation = SlabTessellation::fine;
-  const CadPart part = make_rounded_slab(options);
-  const std::vector<Eigen::Vector3d> outline = positions_of(part.mesh, part.top_outline);
-  const std::size_t n = outline.size();
-  double outline_edge = 0;
-  for (std::size_t i = 0; i < n; ++i) outline_edge += (outline[(i + 1) % n] - outline[i]).norm() / double(n);
-  auto off_outline = [&](const Eigen::Vector3d& p) { return distance_to_polyline(outline, true, p) / outline_edge; };
+  const NoisySlabOutline slab;
   double with_sum = 0, without_sum = 0;
   for (std::uint64_t seed : {1, 2, 3}) {
-    const auto mesh = prepare_mesh(with_noise(part.mesh, 0.1 * outline_edge / part.mean_edge_length, seed));
-    FeatureLineRequest request;
-    for (std::size_t k = 0; k < 4; ++k) request.keys.push_back(part.top_outline[k * n / 4]);
-    request.closed = true;
-    request.options.fitted.enabled = true;
+    const auto mesh = slab.noisy(seed);
+    FeatureLineRequest request = slab.request();
     request.options.crease_fit.curve_pull = 0.5;
     const auto pulled = detect_feature_line(*mesh, request);
     request.options.fitted.enabled = false;
@@ -185,8 +197,8 @@ TEST(FittedCurve, NoisyCreaseRunsOfTheSurfaceLineArePulledTowardTheCurve) {
     const auto crease_fit_only = detect_feature_line(*mesh, request);
     ASSERT_TRUE(pulled.fitted && crease_fit_only.fitted);
     EXPECT_FALSE(pulled_without_curve.fitted);
-    const double with = arc_length_distance(refined_positions(pulled), true, off_outline).mean;
-    const double without = arc_length_distance(refined_positions(crease_fit_only), true, off_outline).mean;
+    const double with = slab.mean_off_outline(refined_positions(pulled));
+    const double without = slab.mean_off_outline(refined_positions(crease_fit_only));
     // Measured 0.049, 0.046, 0.057 outline edges pulled; 0.052, 0.047, 0.061 without.
     EXPECT_LT(with, without) << "seed " << seed;
     with_sum += with, without_sum += without;
