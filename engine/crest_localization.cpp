@@ -290,16 +290,19 @@ double field_blur_variance(const CurvatureField& field, double h, double h2) {
 // radii (the bent frame's); from it, the snake's line wanders with the noisy field's crest and
 // its bend over three radii follows the wander as much as the crest (the correction moved 20%
 // cells both ways: 24,200-triangle sine ridge 0.098 -> 0.138 grid spacings), so the bend is read
-// from the localised line (the fits' smoothed offsets applied) over kWanderBendSpan fit radii and
-// shrunk by kWanderBendSlack.
+// from the localised line (the fits' smoothed offsets applied) over kWanderBendSpan fit radii.
 constexpr double kUnblurMaxNoise = 0.05;
-constexpr double kWanderBendSpan = 6;
-// ... shrunk toward 0 by this over sigma: what a straight crest's localised line still reads
-// as bend at 20% noise. Unshrunk, the straight 245,000-triangle ridge and valley at 20% came
-// out 0.010-0.014 grid spacings further; shrunk by 0.04 / sigma, all 11 curved 20% cells that
-// moved came nearer (arc ridge 80,000: 0.117 -> 0.111; 24,200: 0.103 -> 0.094) and no cell
-// went further (0.02: 4 further by up to 0.004; 0.03: 2).
-constexpr double kWanderBendSlack = 0.04;
+// Over 6 fit radii the bend read on a straight crest's localised line at 20% noise was large
+// enough that it was shrunk toward 0 by 0.04 / sigma; with the jets as wide against the object on
+// fine meshes (sigma 5.4 edges at 245,000 triangles) that took almost all of a real bend's
+// correction away (0.003-0.04 edges applied where sigma^2 / 2R is 0.12), and the 245,000-triangle
+// curved crests at 20% lay 0.09-0.11 grid spacings inside their bends. Over 10 radii, unshrunk:
+// bench_accuracy's 20% cells, 12 nearer (245,000-triangle arcs 0.121 / 0.130 -> 0.095 / 0.104,
+// sines 0.124 / 0.133 -> 0.107 / 0.110; 80,000-triangle arcs 0.107 / 0.099 -> 0.101 / 0.093), 4
+// further (the straight 245,000-triangle ridge and valley 0.079 / 0.076 -> 0.083 / 0.084, the
+// 24,200-triangle sine ridge 0.077 -> 0.081, valley 0.068 -> 0.070); over 6 unshrunk or shrunk by
+// 0.01 / sigma, or over 14 unshrunk, the 245,000-triangle sine valley stayed above 0.114.
+constexpr double kWanderBendSpan = 10;
 // The blur's width (sigma) times the line's curvature up to which the first-order shift is
 // applied. Beyond it, on the 5,000-triangle arcs (0.13-0.14), the lines lay nearer than the
 // shift predicts (0.02-0.05 grid spacings inside the bend, not 0.15) and the correction put
@@ -416,12 +419,11 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
     const std::vector<double> line_bend = wandering ? localised_bends(points, normals, smoothed, kWanderBendSpan * radius)
                                           : bent_frame ? bends
                                                        : line_bends(points, normals, 3 * radius);
-    const double slack = wandering ? kWanderBendSlack / sigma : 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       const bool end = i == 0 || i + 1 == n;
       if ((end && !moves[i == 0 ? 0 : 1]) || (!end && !std::isfinite(offsets[i]) && smoothed[i] == 0)) continue;
       if (sigma * std::abs(line_bend[i]) <= kUnblurMaxBend && sigma <= kUnblurMaxWidthShare * half_widths[i])
-        smoothed[i] -= kUnblurGain * 0.5 * variance * std::copysign(std::max(0.0, std::abs(line_bend[i]) - slack), line_bend[i]);
+        smoothed[i] -= kUnblurGain * 0.5 * variance * line_bend[i];
     }
   }
   for (std::size_t i = 0; i < n; ++i) {

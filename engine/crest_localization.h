@@ -52,7 +52,7 @@ struct CrestOptions {
   /// edge lengths, where the bend is gentle against the blur (sigma / R at most 0.1) and the blur
   /// narrow against the crest (sigma at most 0.75 of the fitted profile's half width), where the
   /// first-order shift holds (accuracy.md). From a noise of 0.05 the bend is the localised line's
-  /// over six fit radii, less 0.04 / sigma (what a straight crest's line reads as bend there).
+  /// over ten fit radii (the snake's line wanders with the noisy field's crest).
   /// false: the field's crest is kept.
   bool unblur = true;
 
