@@ -232,7 +232,7 @@ void localize_on_crest(const LineRun& run, const FeatureStrip& strip, const Flat
 // border the snake reads a field cut off on one side. A clean 245,000-triangle arc crest whose
 // initial line lay up to 10 grid spacings off settled 7 of 8 rings deep with two bumps 0.19 and
 // 0.33 grid spacings off; refined again in a strip around that line it lies within 0.035.
-// bench_accuracy at 0.85 against the outermost ring alone: 10 cells nearer (clean 245,000-triangle
+// bench_accuracy at 0.85 against the outermost ring alone: 8 cells nearer (clean 245,000-triangle
 // arcs 0.017 -> 0.007, at 10% 0.051-0.065 -> 0.048-0.057), 2 further by 0.002 (the arc ridge of
 // 245,000 triangles at 20 and 30%); at 0.75 one 20% line 0.120 -> 0.168.
 constexpr double kSecondStripDepth = 0.85;
@@ -570,18 +570,19 @@ FittedCurveResult fit_curve(const PreparedMesh& pm, const FeatureLineOptions& op
 
 // The curve when asked for, and the refined points inside noisy crease runs pulled toward it
 // (CreaseFitOptions::curve_pull), which needs it whether asked for or not. The curve is fitted
-// beside the crease fit's line, so it is the same either way.
-void fit_curve_and_pull_creases(const PreparedMesh& pm, const FeatureLineOptions& options, double feature_sign,
+// beside the crease fit's line, so it is the same either way. True when points were pulled.
+bool fit_curve_and_pull_creases(const PreparedMesh& pm, const FeatureLineOptions& options, double feature_sign,
                                 std::vector<char> exact, std::vector<char> noisy_crease, const std::vector<char>& pullable,
                                 FeatureLineResult& result) {
   const bool pull = options.crease_fit.curve_pull > 0 && std::find(pullable.begin(), pullable.end(), 1) != pullable.end();
-  if (!options.fitted.enabled && !pull) return;
+  if (!options.fitted.enabled && !pull) return false;
   FittedCurveResult curve = fit_curve(pm, options, feature_sign, std::move(exact), std::move(noisy_crease), result);
   if (pull) {
     pull_toward_curve(pm, curve.points, curve.closed, pullable, options.crease_fit.curve_pull, result.refined);
     result.refined_length = polyline_length(result.refined, result.closed);
   }
   if (options.fitted.enabled) result.fitted = std::move(curve);
+  return pull;
 }
 
 // Where the refined line passes each key (its pin, or the refined point nearest an unpinned
@@ -701,10 +702,9 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   report_key_points(pm, line, join.pins, result);
   result.refined_length = polyline_length(refined, closed);
   result.timings.total_ms = ms_since(start);
-  fit_curve_and_pull_creases(pm, options, context.feature_sign, std::move(join.exact), std::move(join.noisy_crease),
-                             join.pullable, result);
-  // The pull made the curve part of the refined line's work.
-  if (options.crease_fit.curve_pull > 0 && std::find(join.pullable.begin(), join.pullable.end(), 1) != join.pullable.end())
+  // Pulled, the curve was part of the refined line's work.
+  if (fit_curve_and_pull_creases(pm, options, context.feature_sign, std::move(join.exact), std::move(join.noisy_crease),
+                                 join.pullable, result))
     result.timings.total_ms = ms_since(start);
   return result;
 }
