@@ -10,6 +10,12 @@
 namespace featureline {
 namespace {
 
+// The parameter (0 at p, 1 at q) of the point of segment pq nearest to x.
+double nearest_parameter(const Eigen::Vector3d& x, const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+  const double length2 = (q - p).squaredNorm();
+  return length2 > 0 ? std::clamp((x - p).dot(q - p) / length2, 0.0, 1.0) : 0.0;
+}
+
 // Barycentric coordinates (w.r.t. a, b, c) of the point of triangle abc nearest to x: the
 // projection on the plane when it falls inside, else the nearest point of the nearest side.
 std::array<double, 3> nearest_on_triangle(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
@@ -29,8 +35,7 @@ std::array<double, 3> nearest_on_triangle(const Eigen::Vector3d& x, const Eigen:
   for (int side = 0; side < 3; ++side) {
     const Eigen::Vector3d& p = corner[side];
     const Eigen::Vector3d& q = corner[(side + 1) % 3];
-    const double length2 = (q - p).squaredNorm();
-    const double t = length2 > 0 ? std::clamp((x - p).dot(q - p) / length2, 0.0, 1.0) : 0.0;
+    const double t = nearest_parameter(x, p, q);
     const double distance = (x - (p + t * (q - p))).squaredNorm();
     if (distance < best_distance) {
       best_distance = distance;
@@ -129,9 +134,7 @@ namespace {
 Eigen::Vector3d nearest_on_segment(const std::vector<Eigen::Vector3d>& curve, std::size_t segment, const Eigen::Vector3d& x) {
   const Eigen::Vector3d& a = curve[segment];
   const Eigen::Vector3d& b = curve[(segment + 1) % curve.size()];
-  const double length2 = (b - a).squaredNorm();
-  const double t = length2 > 0 ? std::clamp((x - a).dot(b - a) / length2, 0.0, 1.0) : 0.0;
-  return a + t * (b - a);
+  return a + nearest_parameter(x, a, b) * (b - a);
 }
 
 // The point of the curve nearest x, searched from segment `from` (where the point before x on
@@ -177,9 +180,7 @@ void pull_toward_curve(const PreparedMesh& mesh, const std::vector<Eigen::Vector
       started = true;
     }
     const Eigen::Vector3d target = p.position + pull * (nearest_on_curve(curve, closed, segment, p.position) - p.position);
-    const auto& corners = mesh.triangles()[p.face];
-    const auto nearest = std::max_element(p.barycentric.begin(), p.barycentric.end()) - p.barycentric.begin();
-    points[i] = nearest_surface_point_near(mesh, corners[std::size_t(nearest)], target);
+    points[i] = nearest_surface_point_near(mesh, nearest_corner(mesh, p), target);
   }
 }
 

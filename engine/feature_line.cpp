@@ -322,10 +322,7 @@ std::vector<std::uint32_t> vertex_path_along(const PreparedMesh& pm, const std::
     return true;
   };
   for (std::size_t i = 1; i + 1 < points.size(); ++i) {
-    const SurfacePoint& p = points[i];
-    const auto& corners = pm.triangles()[p.face];
-    const int k = int(std::max_element(p.barycentric.begin(), p.barycentric.end()) - p.barycentric.begin());
-    if (!join(corners[k])) return {};
+    if (!join(nearest_corner(pm, points[i]))) return {};
   }
   if (!join(last)) return {};
   return path;

@@ -80,12 +80,6 @@ struct Station {
   bool noisy_crease = false;  ///< on a noisy mesh's crease run (FittedCurveLine::noisy_crease)
 };
 
-std::uint32_t nearest_corner(const PreparedMesh& pm, const SurfacePoint& s) {
-  const auto& t = pm.triangles()[s.face];
-  const int k = int(std::max_element(s.barycentric.begin(), s.barycentric.end()) - s.barycentric.begin());
-  return t[std::size_t(k)];
-}
-
 // The line resampled at even arc length (the closing segment included for a closed line, whose
 // stations do not repeat the first); `unit` is its edge length (FittedCurveLine::edge_length).
 std::vector<Station> stations_along(const PreparedMesh& pm, const FittedCurveLine& line, double& unit, double& length) {

@@ -104,6 +104,11 @@ Eigen::Vector3d position_of(const PreparedMesh& mesh, const SurfaceLocation& l) 
   return p[0];
 }
 
+std::uint32_t nearest_corner(const PreparedMesh& pm, const SurfacePoint& p) {
+  const int k = int(std::max_element(p.barycentric.begin(), p.barycentric.end()) - p.barycentric.begin());
+  return pm.triangles()[p.face][std::size_t(k)];
+}
+
 SurfacePoint surface_point_at_vertex(const PreparedMesh& pm, std::uint32_t v) {
   SurfacePoint s;
   s.position = pm.positions()[v];

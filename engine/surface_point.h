@@ -66,6 +66,9 @@ Eigen::Vector3d position_of(const PreparedMesh& mesh, const SurfaceLocation& l);
 /// The surface point sitting exactly on mesh vertex v (barycentric 1 on one face corner).
 SurfacePoint surface_point_at_vertex(const PreparedMesh& mesh, std::uint32_t v);
 
+/// The corner of p's face with the largest barycentric weight: the vertex p lies nearest.
+std::uint32_t nearest_corner(const PreparedMesh& mesh, const SurfacePoint& p);
+
 /// Checks a surface point given from outside (a client's line): the face exists and the
 /// barycentric coordinates are finite, non-negative (to 1e-6) and sum to 1 (to 1e-6).
 /// \throw InvalidInputError "<where>: face F is out of range (the mesh has N faces)",
