@@ -645,6 +645,7 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
     std::vector<double> residual_length;
     for (std::size_t v = 0; v < n; ++v)
       if (residual[v] >= 0) residual_length.push_back(residual[v] * local[v]);
+    field.noise_samples = residual_length.size();
     field.noise_length = median_of(std::move(residual_length));
     residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return r < 0; }), residual.end());
     field.noise = median_of(residual);

@@ -66,6 +66,10 @@ constexpr double kBlendNoise = 4.0;
 // Estimated noise (local edge lengths) below which a mesh is clean for the curve's ends
 // (smooth_points): bench_accuracy's clean fields read 0.000-0.004, at 10% noise 0.036.
 constexpr double kCleanMeshNoise = 0.02;
+// A mesh noise estimate read at fewer vertices than this says nothing (CurvatureField::noise_samples).
+constexpr std::size_t kMinNoiseSamples = 20;
+// ... nor does a crease run's scatter read at fewer points than this (exact_run_scatter).
+constexpr std::size_t kMinRunResiduals = 5;
 // A corner's point weighs this much more than others, so the spline pieces meet there.
 constexpr double kCornerWeight = 1e3;
 
@@ -736,6 +740,67 @@ std::vector<char> sharp_bends_within(const std::vector<Station>& st, bool closed
   return near;
 }
 
+// The noise the line's crease runs carry and whether to average them (average_noisy_runs).
+struct RunNoise {
+  double sigma = 0;         ///< per axis, model units
+  bool noisy = false;       ///< average the runs
+  bool exact_runs = false;  ///< the exact runs too: their scatter, not the mesh, says they are noisy
+};
+
+// The scatter of the line's exact crease runs about a smooth curve, per axis (model units): at
+// each point with two more of its run on either side, its offset across the line from the
+// quadratic (against arc length) through those four, a median over the line. Independent noise
+// sigma gives a median offset of 1.18 sigma (two axes across the line) times sqrt(1 + 34/36)
+// (the quadratic's own error at the middle of four evenly spaced points): 1.64 sigma. 0 when
+// fewer than kMinRunResiduals points have their four.
+double exact_run_scatter(const FittedCurveLine& line) {
+  const std::size_t n = line.points.size();
+  if (line.exact.size() != n || n < 5) return 0;
+  auto at = [&](std::ptrdiff_t i) -> std::size_t { return std::size_t((i % std::ptrdiff_t(n) + std::ptrdiff_t(n)) % std::ptrdiff_t(n)); };
+  std::vector<double> offsets;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!line.closed && (i < 2 || i + 2 >= n)) continue;
+    bool run = true;
+    for (std::ptrdiff_t k = -2; k <= 2 && run; ++k) run = line.exact[at(std::ptrdiff_t(i) + k)] != 0;
+    if (!run) continue;
+    // Arc length from point i, then the quadratic through the four neighbours (least squares).
+    double s[5] = {0, 0, 0, 0, 0};
+    for (std::ptrdiff_t k = 1; k <= 2; ++k) {
+      s[2 + k] = s[1 + k] + (line.points[at(std::ptrdiff_t(i) + k)].position - line.points[at(std::ptrdiff_t(i) + k - 1)].position).norm();
+      s[2 - k] = s[3 - k] - (line.points[at(std::ptrdiff_t(i) - k)].position - line.points[at(std::ptrdiff_t(i) - k + 1)].position).norm();
+    }
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d rhs = Eigen::Matrix3d::Zero();
+    for (const int k : {0, 1, 3, 4}) {
+      const Eigen::Vector3d basis(1, s[k], s[k] * s[k]);
+      normal += basis * basis.transpose();
+      rhs += basis * line.points[at(std::ptrdiff_t(i) + k - 2)].position.transpose();
+    }
+    const Eigen::FullPivLU<Eigen::Matrix3d> solver(normal);
+    if (!solver.isInvertible()) continue;
+    const Eigen::Matrix3d c = solver.solve(rhs);  // rows: constant, slope, curvature terms
+    Eigen::Vector3d tangent = c.row(1).transpose();
+    if (!(tangent.norm() > 0)) continue;
+    tangent.normalize();
+    Eigen::Vector3d offset = line.points[i].position - c.row(0).transpose();
+    offset -= offset.dot(tangent) * tangent;
+    offsets.push_back(offset.norm());
+  }
+  if (offsets.size() < kMinRunResiduals) return 0;
+  return median_of(std::move(offsets)) / 1.64;
+}
+
+// The mesh's noise estimate, or where it has none (no vertex it could read the noise at) the
+// exact runs' own scatter: a CAD exporter's tessellation with no vertex off its crease outlines
+// reads as clean whatever its noise, and its runs, kept as they are on the surface line, are then
+// averaged by the curve when they scatter beyond kCleanMeshNoise of the line's edge.
+RunNoise run_noise(const PreparedMesh& pm, const FittedCurveLine& line, double unit) {
+  const CurvatureField& field = pm.curvature();
+  if (field.noise_samples >= kMinNoiseSamples) return {field.noise_length, field.noise >= kCleanMeshNoise, false};
+  const double scatter = exact_run_scatter(line);
+  return {scatter, scatter >= kCleanMeshNoise * unit, true};
+}
+
 // The fitted points of a noisy mesh's crease runs averaged along the line (engine/line_averaging.h),
 // in place; returns which were. Not near a sharp bend, where the surface line's own point stands
 // (bench_accuracy, noisy CAD: averaging there too put the rounded slab's corners further, 0.046 ->
@@ -744,17 +809,18 @@ std::vector<char> sharp_bends_within(const std::vector<Station>& st, bool closed
 // vertices' other edges, the mesh's noise in local edge lengths times the line's edge read a
 // quarter of it, and the windows stayed short (wing nut 0.69 -> 0.63 of the initial line's
 // distance with the noise as a length, all noisy CAD 0.67 -> 0.65).
-std::vector<char> average_noisy_runs(const PreparedMesh& pm, const std::vector<Station>& st, const std::vector<char>& bent,
+std::vector<char> average_noisy_runs(const RunNoise& noise, const std::vector<Station>& st, const std::vector<char>& bent,
                                      const std::vector<std::size_t>& corners, bool closed, double length, double unit,
                                      const FittedCurveOptions& o, std::vector<Eigen::Vector3d>& q) {
   const std::size_t n = st.size();
   AveragedLineInput line{std::vector<double>(n), q, std::vector<char>(n, 0), std::vector<char>(n, 0), closed ? length : 0,
-                         unit, pm.curvature().noise_length};
-  if (!(o.run_averaging > 0) || pm.curvature().noise < kCleanMeshNoise) return line.movable;
+                         unit, noise.sigma};
+  if (!(o.run_averaging > 0) || !noise.noisy) return line.movable;
   for (const std::size_t c : corners) line.corner[c] = 1;
   for (std::size_t i = 0; i < n; ++i) {
     line.u[i] = st[i].u;
-    line.movable[i] = st[i].noisy_crease && !bent[i] && !line.corner[i];
+    const bool on_run = st[i].noisy_crease || (noise.exact_runs && st[i].exact);
+    line.movable[i] = on_run && !bent[i] && !line.corner[i];
   }
   q = average_along_line(line, {o.run_averaging, 1 / kStationSpacing}).points;
   return line.movable;
@@ -793,7 +859,7 @@ FittedCurveResult fit_feature_curve(const PreparedMesh& pm, const FittedCurveLin
   const bool clean = pm.curvature().noise < kCleanMeshNoise;
   const std::vector<std::size_t> corners = corners_of(stations, q, result.closed, options.corner_angle);
   const std::vector<char> averaged =
-      average_noisy_runs(pm, stations, bent, corners, result.closed, length, unit, options, q);
+      average_noisy_runs(run_noise(pm, line, unit), stations, bent, corners, result.closed, length, unit, options, q);
   result.points = smooth_points(stations, q, corners, result.closed, clean, length, spacing, options, result);
   // An exact crease run is the feature, and elsewhere where the fits were refused the surface line
   // is the best estimate there is: the curve keeps the line's points rather than the spline's

@@ -18,7 +18,8 @@
 //    radius) and on exact crease runs of a clean mesh, the surface line's own point is kept.
 // On a noisy mesh's crease runs those points are then averaged along the line over windows chosen
 // point by point (engine/line_averaging.h): long where the crease runs straight, short near its
-// bends. A penalised cubic B-spline (Eilers and Marx's P-spline: uniform knots, a second-difference
+// bends. A mesh with no vertex off its creases (a CAD exporter's skinny tessellation) reads no
+// noise; there the runs' own scatter about a smooth curve says whether they are noisy. A penalised cubic B-spline (Eilers and Marx's P-spline: uniform knots, a second-difference
 // penalty on the control points, re-weighted against outlying points) is fitted through the
 // points with a stated spacing of control points, split at corners of the line, and sampled as a
 // polyline; the averaged points stand as they are (the spline's penalty would round the crease's
