@@ -169,6 +169,7 @@ json mesh_info_to_json(const PreparedMesh& m, double load_ms) {
         {"method", s.curvature_method},
         {"noise", s.noise},
         {"noise_length", s.noise_length},
+        {"noise_samples", s.noise_samples},
         {"radius", s.curvature_radius},
         {"jet_degree", s.jet_degree.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.jet_degree)},
         {"smoothing_passes", s.curvature_smoothing_passes},

@@ -81,6 +81,10 @@ struct CurvatureOptions {
 /// 0.000-0.022, the same meshes at 10% noise 0.046-0.064).
 constexpr double kNoisyCreaseNoise = 0.035;
 
+/// A noise estimate read at fewer vertices than this says nothing of the mesh's noise
+/// (CurvatureField::noise_samples).
+constexpr std::size_t kMinNoiseSamples = 20;
+
 /// Limits of the options, shared by validation, the JSON mapping and the API description.
 struct CurvatureLimits {
   static constexpr double max_radius = 12;

@@ -66,9 +66,7 @@ constexpr double kBlendNoise = 4.0;
 // Estimated noise (local edge lengths) below which a mesh is clean for the curve's ends
 // (smooth_points): bench_accuracy's clean fields read 0.000-0.004, at 10% noise 0.036.
 constexpr double kCleanMeshNoise = 0.02;
-// A mesh noise estimate read at fewer vertices than this says nothing (CurvatureField::noise_samples).
-constexpr std::size_t kMinNoiseSamples = 20;
-// ... nor does a crease run's scatter read at fewer points than this (exact_run_scatter).
+// A crease run's scatter read at fewer points than this says nothing (exact_run_scatter).
 constexpr std::size_t kMinRunResiduals = 5;
 // A corner's point weighs this much more than others, so the spline pieces meet there.
 constexpr double kCornerWeight = 1e3;

@@ -475,6 +475,7 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
   stats.curvature_method = to_string(options.curvature.method);
   stats.noise = pm.curvature.noise;
   stats.noise_length = pm.curvature.noise_length;
+  stats.noise_samples = pm.curvature.noise_samples;
   stats.curvature_radius = pm.curvature.radius;
   if (options.curvature.method == CurvatureMethod::jet) stats.jet_degree = to_string(pm.curvature.jet_degree);
   stats.curvature_smoothing_passes = pm.curvature.smoothing_passes;

@@ -64,6 +64,7 @@ struct MeshStatistics {
   std::string curvature_method;   ///< "jet" or "cotangent"
   double noise = 0;               ///< estimated RMS noise along the normal, in local edge lengths
   double noise_length = 0;        ///< the same in length units (CurvatureField::noise_length)
+  std::size_t noise_samples = 0;  ///< vertices it was read at (CurvatureField::noise_samples)
   double curvature_radius = 0;    ///< jet radius used, local edge lengths (0: cotangent)
   std::string jet_degree;         ///< "quadric" or "cubic": the jets fitted ("" with cotangent)
   int curvature_smoothing_passes = 0;  ///< Laplacian passes over the principal curvatures

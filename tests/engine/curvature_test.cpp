@@ -246,6 +246,8 @@ TEST(PrepareMesh, NoiseIsEstimatedAsALengthWhateverTheEdges) {
   EXPECT_NEAR(coarse.noise_length / kSigma, 0.85, 0.15);
   EXPECT_NEAR(fine.noise_length / coarse.noise_length, 1.0, 0.1);
   EXPECT_NEAR(fine.noise / coarse.noise, 2.0, 0.2);
+  EXPECT_EQ(coarse.noise_samples, 41u * 41u);  // every vertex: no crease, fewer than 20,000
+  EXPECT_EQ(fine.noise_samples, 81u * 81u);
 }
 
 TEST(PrepareMesh, RefusesWhatCannotFitItsMemoryBound) {
