@@ -241,7 +241,8 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
                 "agrees with every narrower one within this many standard deviations (0: the spline alone)", "",
                 &O::fitted, &FittedCurveOptions::run_averaging),
       option<O>("crest.move_keys", {}, "Crest localisation: keys (and other pinned points) move across the line to the "
-                "crest too, within max_key_shift (false: the line passes through the key vertices)", "--keys-on-vertices",
+                "crest too, within max_key_shift; on a noisy mesh's crease runs they are re-fitted with the run, "
+                "within crease_fit.max_shift (false: the line passes through the key vertices)", "--keys-on-vertices",
                 &O::crest, &CrestOptions::move_keys),
       option<O>("crest.follow_bend", {}, "Crest localisation: fits measure across the line from its bend, so a bent "
                 "crest is not read as an offset into the bend (false: from its tangent)", "", &O::crest, &CrestOptions::follow_bend),

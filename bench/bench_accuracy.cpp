@@ -822,9 +822,9 @@ void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& 
   if (!noisy_cad.empty()) std::printf("\n");
   auto print_sums = [&](const char* which, const std::map<std::size_t, NoisyCadSums>& by_variant) {
     for (const auto& [variant, sums] : by_variant)
-      std::printf("Noisy CAD, %s (%zu), %s: fitted / initial %s, refined / initial %s, fitted worse than refined %zu, "
+      std::printf("Noisy CAD, %s (%zu), %s: fitted / initial %.3f, refined / initial %.3f, fitted worse than refined %zu, "
                   "refined above the floor %.4f per line\n", which, sums.lines, variants[variant].name.c_str(),
-                  ratio_text(sums.fitted, sums.initial).c_str(), ratio_text(sums.refined, sums.initial).c_str(), sums.worse,
+                  sums.fitted / sums.initial, sums.refined / sums.initial, sums.worse,
                   sums.above_floor / double(std::max<std::size_t>(1, sums.lines)));
   };
   print_sums("all lines", noisy_cad);

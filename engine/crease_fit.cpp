@@ -82,14 +82,15 @@ Eigen::Vector3d regress_at(const PreparedMesh& mesh, const std::vector<std::uint
   return coefficients.row(0).transpose();
 }
 
-// Every vertex's estimate of the crease: the regression at the fixed bandwidth, or over windows
-// chosen vertex by vertex (options.confidence > 0); the chain's ends are its pinned keys.
+// Every free vertex's estimate of the crease: the regression at the fixed bandwidth, or over
+// windows chosen vertex by vertex (options.confidence > 0).
 std::vector<Eigen::Vector3d> crease_estimates(const PreparedMesh& mesh, const std::vector<std::uint32_t>& chain,
-                                              const std::vector<double>& s, const CreaseFitOptions& options) {
+                                              const std::vector<double>& s, const std::vector<char>& fixed,
+                                              const CreaseFitOptions& options) {
   std::vector<Eigen::Vector3d> estimates(chain.size());
   if (!(options.confidence > 0)) {
-    for (std::size_t i = 1; i + 1 < chain.size(); ++i)
-      estimates[i] = regress_at(mesh, chain, s, i, options.bandwidth * mesh.local_edge_length(chain[i]));
+    for (std::size_t i = 0; i < chain.size(); ++i)
+      if (!fixed[i]) estimates[i] = regress_at(mesh, chain, s, i, options.bandwidth * mesh.local_edge_length(chain[i]));
     return estimates;
   }
   AveragedLineInput line;
@@ -97,8 +98,7 @@ std::vector<Eigen::Vector3d> crease_estimates(const PreparedMesh& mesh, const st
   double unit = 0;
   for (const auto v : chain) line.points.push_back(mesh.positions()[v]), unit += mesh.local_edge_length(v);
   unit /= double(chain.size());
-  line.movable.assign(chain.size(), 1);
-  line.movable.front() = line.movable.back() = 0;
+  for (const char f : fixed) line.movable.push_back(!f);
   line.corner.assign(chain.size(), 0);
   line.unit = unit;
   line.sigma = mesh.curvature().noise_length;
@@ -185,14 +185,22 @@ void pull_toward_curve(const PreparedMesh& mesh, const std::vector<Eigen::Vector
 }
 
 CreaseFitResult fit_noisy_crease(const PreparedMesh& mesh, const std::vector<std::uint32_t>& chain,
-                                 const CreaseFitOptions& options) {
+                                 const CreaseFitOptions& options, std::vector<char> fixed) {
   CreaseFitResult result;
   for (const auto v : chain) result.points.push_back(surface_point_at_vertex(mesh, v));
   if (options.bandwidth <= 0 || chain.size() < 3) return result;
+  if (fixed.empty()) {
+    fixed.assign(chain.size(), 0);
+    fixed.front() = fixed.back() = 1;
+  }
+  fixed.resize(chain.size(), 1);
   const std::vector<double> s = arc_lengths(mesh, chain);
-  const std::vector<Eigen::Vector3d> estimates = crease_estimates(mesh, chain, s, options);
+  const std::vector<Eigen::Vector3d> estimates = crease_estimates(mesh, chain, s, fixed, options);
   double shift_sum = 0;
-  for (std::size_t i = 1; i + 1 < chain.size(); ++i) {
+  std::size_t free = 0;
+  for (std::size_t i = 0; i < chain.size(); ++i) {
+    if (fixed[i]) continue;
+    ++free;
     const double edge = mesh.local_edge_length(chain[i]);
     const Eigen::Vector3d& vertex = mesh.positions()[chain[i]];
     const Eigen::Vector3d estimate = vertex + options.step * (estimates[i] - vertex);
@@ -205,7 +213,7 @@ CreaseFitResult fit_noisy_crease(const PreparedMesh& mesh, const std::vector<std
     result.points[i] = on_surface;
     shift_sum += shift;
   }
-  const std::size_t moved = chain.size() - 2 - result.kept_vertices;
+  const std::size_t moved = free - result.kept_vertices;
   result.mean_shift = moved > 0 ? shift_sum / double(moved) : 0;
   return result;
 }

@@ -69,16 +69,17 @@ struct CreaseFitOptions {
 };
 
 struct CreaseFitResult {
-  /// One point per chain vertex; the two ends are the chain's end vertices unchanged.
+  /// One point per chain vertex; fixed vertices (by default the two ends) unchanged.
   std::vector<SurfacePoint> points;
-  std::size_t kept_vertices = 0;  ///< interior vertices left in place (max_shift exceeded)
-  double mean_shift = 0;          ///< mean distance moved by interior points, local edge lengths
+  std::size_t kept_vertices = 0;  ///< free vertices left in place (max_shift exceeded)
+  double mean_shift = 0;          ///< mean distance moved by the free points, local edge lengths
 };
 
 /// Re-estimates the crease through `chain` (consecutive mesh vertices joined by edges) and maps
-/// it onto the surface. The ends stay on the chain's end vertices (they are pinned keys).
+/// it onto the surface. `fixed` (per chain vertex; empty: the two ends) marks the vertices that
+/// stay where they are: pins shared with the rest of the line.
 CreaseFitResult fit_noisy_crease(const PreparedMesh& mesh, const std::vector<std::uint32_t>& chain,
-                                 const CreaseFitOptions& options = {});
+                                 const CreaseFitOptions& options = {}, std::vector<char> fixed = {});
 
 /// Moves each point of `points` marked in `pullable` the share `pull` of the way toward the
 /// nearest point of the polyline `curve` (closed: its last point joins its first), and then onto

@@ -38,7 +38,9 @@ struct CrestOptions {
   int smoothing_passes = 4; ///< (1, 2, 1)/4 passes over the offsets along the line
   /// The line's pinned ends (its keys, and where a piece was split) move across the line to the
   /// crest too, within max_shift: a key is a vertex picked near the feature, and the line passes
-  /// through the crest point nearest it. false: they stay on their vertices (the paper's pins).
+  /// through the crest point nearest it. On a noisy mesh's crease runs the keys are re-fitted with
+  /// the run (engine/crease_fit.h), as noisy as its other vertices. false: they stay on their
+  /// vertices (the paper's pins).
   bool move_keys = true;
   /// Fits measure across the line from its bend (over three fit radii), so a bent crest is not
   /// read as an offset into the bend, on meshes whose estimated noise is below 0.09 local edge

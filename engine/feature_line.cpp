@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 
@@ -90,6 +91,41 @@ void mark_crease_pieces(const PreparedMesh& pm, const FeatureLineOptions& option
   }
 }
 
+// A stretch of consecutive noisy crease pieces re-fitted as one chain (fit_noisy_crease). The
+// keys on it are noisy vertices like any other of the run, picked near the crease, not on it
+// (CrestOptions::move_keys): a fit that stops at each one pins the line to the noise there and
+// estimates the vertices beside it from one side only. The run's ends stay where the line goes
+// on into another piece, and both of a closed line's first key (its two ends are one point).
+struct CreaseRun {
+  std::size_t begin = 0, end = 0;    ///< indices into the unrolled line
+  std::vector<SurfacePoint> points;  ///< one per line vertex begin..end
+};
+
+std::vector<CreaseRun> fit_crease_runs(const PreparedMesh& pm, const FeatureLineOptions& options, bool closed,
+                                       const std::vector<std::uint32_t>& line, const std::vector<Piece>& pieces) {
+  std::vector<CreaseRun> runs;
+  const bool move_keys = options.crest.move_keys;
+  for (std::size_t first = 0; first < pieces.size();) {
+    if (!pieces[first].noisy_crease) {
+      ++first;
+      continue;
+    }
+    std::size_t last = first;
+    while (last + 1 < pieces.size() && pieces[last + 1].noisy_crease) ++last;
+    CreaseRun run{pieces[first].begin, pieces[last].end, {}};
+    const std::vector<std::uint32_t> chain(line.begin() + std::ptrdiff_t(run.begin), line.begin() + std::ptrdiff_t(run.end) + 1);
+    std::vector<char> fixed(chain.size(), 0);
+    fixed.front() = closed || !move_keys || run.begin > 0;
+    fixed.back() = closed || !move_keys || run.end + 1 < line.size();
+    if (!move_keys)
+      for (std::size_t k = first; k < last; ++k) fixed[pieces[k].end - run.begin] = 1;
+    run.points = fit_noisy_crease(pm, chain, options.crease_fit, std::move(fixed)).points;
+    runs.push_back(std::move(run));
+    first = last + 1;
+  }
+  return runs;
+}
+
 // What refining every piece of one line reads.
 struct LineRun {
   const PreparedMesh& pm;
@@ -97,6 +133,7 @@ struct LineRun {
   const LineContext& context;
   const Cancellation* cancel;
   const std::vector<std::uint32_t>& line;  ///< unrolled
+  const std::vector<CreaseRun>& crease_runs;
 };
 
 // One piece being refined: its vertices, its initial line's points, and what replaces them.
@@ -444,6 +481,15 @@ void snake_side_by_side(const LineRun& run, Executor& executor, const std::vecto
   else executor.run_beside(front, back);
 }
 
+// A noisy crease piece's points: its share of the run it belongs to.
+std::vector<SurfacePoint> crease_fit_points(const LineRun& run, const PieceWork& work) {
+  for (const CreaseRun& crease : run.crease_runs)
+    if (crease.begin <= work.piece.begin && work.piece.end <= crease.end)
+      return {crease.points.begin() + std::ptrdiff_t(work.piece.begin - crease.begin),
+              crease.points.begin() + std::ptrdiff_t(work.piece.end - crease.begin) + 1};
+  throw std::logic_error("a noisy crease piece outside every crease run");
+}
+
 // Stages 3b-4 on a snaked piece: the snake's line crest-localised from the pins placed so far
 // (and, when it reached its strip's border, refined again nearer), or the piece's kept crease,
 // re-fitted crease or initial line.
@@ -453,7 +499,7 @@ void finish_piece(const LineRun& run, SnakedPiece& part, PieceWork& work, Featur
     work.points = work.initial_points;
     work.report.kept = PieceKept::crease;
   } else if (work.piece.noisy_crease) {
-    work.points = fit_noisy_crease(run.pm, work.sub, run.options.crease_fit).points;
+    work.points = crease_fit_points(run, work);
     work.report.kept = PieceKept::crease_fit;
     work.report.refined_strength = mean_feature_strength(run.pm, work.points, run.context.feature_sign, run.options.snake.curvature_cap);
   } else if (!needs_snake(work.piece)) {
@@ -681,7 +727,8 @@ FeatureLineResult detect_feature_line(const PreparedMesh& pm, const FeatureLineR
   const LineContext context = line_context(pm, request, result);
   mark_crease_pieces(pm, options, line.vertices, context, pieces);
   PieceJoin join{Pins(line.vertices.size(), closed), crease_pins_of(pieces, closed, line.vertices.size()), {}, {}, {}};
-  const LineRun run{pm, options, context, request.cancel, line.vertices};
+  const std::vector<CreaseRun> crease_runs = fit_crease_runs(pm, options, closed, line.vertices, pieces);
+  const LineRun run{pm, options, context, request.cancel, line.vertices, crease_runs};
   // As many pieces at a time as the executor has participants: their strips and snakes are held
   // until their turn, so a line of many keys holds no more than that many at once.
   Executor& executor = executor_or_default(request.executor);

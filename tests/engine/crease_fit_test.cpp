@@ -98,6 +98,29 @@ TEST(CreaseFit, OnANoisyCopyThePointsAreNearerTheTrueCreaseThanTheVertices) {
   });
 }
 
+TEST(CreaseFit, FixedVerticesStayAndFreeEndsMoveTowardTheCrease) {
+  // A chain whose middle vertex is fixed (a pin shared with the rest of a line) and whose ends
+  // are free (the line's own ends, keys picked near the crease): the fixed vertex keeps its
+  // place, and the ends, estimated from their run on one side, lie nearer the clean outline on
+  // average than the noisy end vertices.
+  const CadPart part = fine_slab();
+  const auto truth = positions_of(part.mesh, part.top_outline);
+  double vertices_off = 0, ends_off = 0;
+  on_noisy_half_outlines(part, [&](const PreparedMesh& noisy, const std::vector<std::uint32_t>& chain, std::uint64_t seed) {
+    std::vector<char> fixed(chain.size(), 0);
+    const std::size_t middle = chain.size() / 2;
+    fixed[middle] = 1;
+    const CreaseFitResult fit = fit_noisy_crease(noisy, chain, {}, fixed);
+    ASSERT_EQ(fit.points.size(), chain.size());
+    EXPECT_EQ(fit.points[middle].position, noisy.positions()[chain[middle]]) << "seed " << seed;
+    for (const std::size_t end : {std::size_t(0), chain.size() - 1}) {
+      vertices_off += distance_to_polyline(truth, true, noisy.positions()[chain[end]]);
+      ends_off += distance_to_polyline(truth, true, fit.points[end].position);
+    }
+  });
+  EXPECT_LT(ends_off, 0.9 * vertices_off);  // 0.84 measured
+}
+
 TEST(CreaseFit, WindowsChosenPerVertexBeatTheFixedBandwidth) {
   // On the straight sides the windows grow long, at the rounded corners they stay short; the
   // fixed 2.5-edge bandwidth is too short for the one and too long for the other.
