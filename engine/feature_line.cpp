@@ -95,7 +95,7 @@ void mark_crease_pieces(const PreparedMesh& pm, const FeatureLineOptions& option
 // keys on it are noisy vertices like any other of the run, picked near the crease, not on it
 // (CrestOptions::move_keys): a fit that stops at each one pins the line to the noise there and
 // estimates the vertices beside it from one side only. The run's ends stay where the line goes
-// on into another piece, and both of a closed line's first key (its two ends are one point).
+// on into another piece, and a closed line keeps its first key, where its two ends meet.
 struct CreaseRun {
   std::size_t begin = 0, end = 0;    ///< indices into the unrolled line
   std::vector<SurfacePoint> points;  ///< one per line vertex begin..end

@@ -745,44 +745,49 @@ struct RunNoise {
   bool exact_runs = false;  ///< the exact runs too: their scatter, not the mesh, says they are noisy
 };
 
-// The scatter of the line's exact crease runs about a smooth curve, per axis (model units): at
-// each point with two more of its run on either side, its offset across the line from the
-// quadratic (against arc length) through those four, a median over the line. Independent noise
-// sigma gives a median offset of 1.18 sigma (two axes across the line) times sqrt(1 + 34/36)
-// (the quadratic's own error at the middle of four evenly spaced points): 1.64 sigma. 0 when
-// fewer than kMinRunResiduals points have their four.
+// How far the middle of five consecutive points lies across the line from the quadratic
+// (against arc length, least squares) through the other four; nothing when they coincide.
+std::optional<double> offset_from_neighbours(const std::array<Eigen::Vector3d, 5>& x) {
+  std::array<double, 5> s{0, 0, 0, 0, 0};  // arc length from the middle point
+  for (int k = 1; k <= 2; ++k) {
+    s[2 + k] = s[1 + k] + (x[2 + k] - x[1 + k]).norm();
+    s[2 - k] = s[3 - k] - (x[2 - k] - x[3 - k]).norm();
+  }
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero(), rhs = Eigen::Matrix3d::Zero();
+  for (const int k : {0, 1, 3, 4}) {
+    const Eigen::Vector3d basis(1, s[k], s[k] * s[k]);
+    normal += basis * basis.transpose();
+    rhs += basis * x[k].transpose();
+  }
+  const Eigen::FullPivLU<Eigen::Matrix3d> solver(normal);
+  if (!solver.isInvertible()) return std::nullopt;
+  const Eigen::Matrix3d c = solver.solve(rhs);  // rows: constant, slope and curvature terms
+  const Eigen::Vector3d tangent = c.row(1).transpose();
+  if (!(tangent.norm() > 0)) return std::nullopt;
+  const Eigen::Vector3d offset = x[2] - c.row(0).transpose();
+  return (offset - offset.dot(tangent.normalized()) * tangent.normalized()).norm();
+}
+
+// The scatter of the line's exact crease runs about a smooth curve, per axis (model units): the
+// median offset_from_neighbours of the points with two more of their run on either side.
+// Independent noise sigma gives a median of 1.18 sigma (two axes across the line) times
+// sqrt(1 + 34/36) (the quadratic's own error at the middle of four evenly spaced points): 1.64
+// sigma. 0 when fewer than kMinRunResiduals points have their four.
 double exact_run_scatter(const FittedCurveLine& line) {
   const std::size_t n = line.points.size();
   if (line.exact.size() != n || n < 5) return 0;
-  auto at = [&](std::ptrdiff_t i) -> std::size_t { return std::size_t((i % std::ptrdiff_t(n) + std::ptrdiff_t(n)) % std::ptrdiff_t(n)); };
   std::vector<double> offsets;
   for (std::size_t i = 0; i < n; ++i) {
     if (!line.closed && (i < 2 || i + 2 >= n)) continue;
+    std::array<Eigen::Vector3d, 5> x;
     bool run = true;
-    for (std::ptrdiff_t k = -2; k <= 2 && run; ++k) run = line.exact[at(std::ptrdiff_t(i) + k)] != 0;
+    for (std::size_t k = 0; k < 5 && run; ++k) {
+      const std::size_t j = (i + n + k - 2) % n;
+      run = line.exact[j] != 0;
+      x[k] = line.points[j].position;
+    }
     if (!run) continue;
-    // Arc length from point i, then the quadratic through the four neighbours (least squares).
-    double s[5] = {0, 0, 0, 0, 0};
-    for (std::ptrdiff_t k = 1; k <= 2; ++k) {
-      s[2 + k] = s[1 + k] + (line.points[at(std::ptrdiff_t(i) + k)].position - line.points[at(std::ptrdiff_t(i) + k - 1)].position).norm();
-      s[2 - k] = s[3 - k] - (line.points[at(std::ptrdiff_t(i) - k)].position - line.points[at(std::ptrdiff_t(i) - k + 1)].position).norm();
-    }
-    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-    Eigen::Matrix3d rhs = Eigen::Matrix3d::Zero();
-    for (const int k : {0, 1, 3, 4}) {
-      const Eigen::Vector3d basis(1, s[k], s[k] * s[k]);
-      normal += basis * basis.transpose();
-      rhs += basis * line.points[at(std::ptrdiff_t(i) + k - 2)].position.transpose();
-    }
-    const Eigen::FullPivLU<Eigen::Matrix3d> solver(normal);
-    if (!solver.isInvertible()) continue;
-    const Eigen::Matrix3d c = solver.solve(rhs);  // rows: constant, slope, curvature terms
-    Eigen::Vector3d tangent = c.row(1).transpose();
-    if (!(tangent.norm() > 0)) continue;
-    tangent.normalize();
-    Eigen::Vector3d offset = line.points[i].position - c.row(0).transpose();
-    offset -= offset.dot(tangent) * tangent;
-    offsets.push_back(offset.norm());
+    if (const auto offset = offset_from_neighbours(x)) offsets.push_back(*offset);
   }
   if (offsets.size() < kMinRunResiduals) return 0;
   return median_of(std::move(offsets)) / 1.64;

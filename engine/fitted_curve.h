@@ -19,7 +19,8 @@
 // On a noisy mesh's crease runs those points are then averaged along the line over windows chosen
 // point by point (engine/line_averaging.h): long where the crease runs straight, short near its
 // bends. A mesh with no vertex off its creases (a CAD exporter's skinny tessellation) reads no
-// noise; there the runs' own scatter about a smooth curve says whether they are noisy. A penalised cubic B-spline (Eilers and Marx's P-spline: uniform knots, a second-difference
+// noise; there the runs' own scatter about a smooth curve says whether they are noisy. A
+// penalised cubic B-spline (Eilers and Marx's P-spline: uniform knots, a second-difference
 // penalty on the control points, re-weighted against outlying points) is fitted through the
 // points with a stated spacing of control points, split at corners of the line, and sampled as a
 // polyline; the averaged points stand as they are (the spline's penalty would round the crease's
