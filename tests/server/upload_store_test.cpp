@@ -12,9 +12,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <thread>
 #include <vector>
 
@@ -251,27 +253,45 @@ bool port_answers(int port) {
   return ok;
 }
 
-// A real redis-server on a free loopback port, without persistence, stopped by its PID.
+// Whether process `pid` holds a socket listening on 127.0.0.1:`port`: its fds against the kernel's
+// table of listening TCP sockets. A port that merely answers may belong to another test's
+// server: a free port is picked, released and bound later, and tests run side by side.
+bool listens_on(pid_t pid, int port) {
+  std::ifstream table("/proc/net/tcp");
+  std::string line;
+  std::getline(table, line);  // header
+  std::vector<std::string> inodes;
+  char local_port[8];
+  std::snprintf(local_port, sizeof local_port, ":%04X", port);
+  while (std::getline(table, line)) {
+    std::istringstream fields(line);
+    std::string slot, local, remote, state, queues, timer, retransmits, uid, timeout, inode;
+    fields >> slot >> local >> remote >> state >> queues >> timer >> retransmits >> uid >> timeout >> inode;
+    if (state == "0A" && local.size() > 5 && local.compare(local.size() - 5, 5, local_port) == 0)
+      inodes.push_back("socket:[" + inode + "]");
+  }
+  std::error_code error;
+  fs::directory_iterator fd("/proc/" + std::to_string(pid) + "/fd", error), end;
+  for (; !error && fd != end; fd.increment(error)) {  // the process may exit meanwhile
+    const auto target = fs::read_symlink(fd->path(), error);
+    if (!error && std::find(inodes.begin(), inodes.end(), target.string()) != inodes.end()) return true;
+    error.clear();
+  }
+  return false;
+}
+
+// A real redis-server on a free loopback port, without persistence, stopped by its PID. When the
+// port it was given is taken before it binds, it starts again on another (a port of the test's
+// own choosing is tried again as it is, a few times).
 class RedisProcess {
  public:
   /// `extra`: more redis-server arguments (--requirepass, --user).
-  explicit RedisProcess(std::string policy = "noeviction", int port = 0, std::vector<std::string> extra = {})
-      : port_(port != 0 ? port : free_loopback_port()) {
-    std::vector<std::string> args = {"redis-server", "--port", std::to_string(port_), "--bind", "127.0.0.1", "--save", "",
-                                     "--appendonly", "no", "--maxmemory", "8mb", "--maxmemory-policy", policy,
-                                     "--loglevel", "warning", "--dir", "/tmp"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    pid_ = fork();
-    if (pid_ == 0) {
-      const int null = open("/dev/null", O_WRONLY);  // Redis' start-up banner is not test output
-      dup2(null, 1);
-      execv("/usr/bin/redis-server", argv.data());
-      _exit(127);
+  explicit RedisProcess(std::string policy = "noeviction", int port = 0, std::vector<std::string> extra = {}) {
+    for (int attempt = 0; attempt < 5 && pid_ <= 0; ++attempt) {
+      port_ = port != 0 ? port : free_loopback_port();
+      start(policy, extra);
+      if (!wait_until_listening()) stop();
     }
-    for (int i = 0; i < 100 && !port_answers(port_); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   ~RedisProcess() { stop(); }
   void stop() {
@@ -286,14 +306,45 @@ class RedisProcess {
     }
     pid_ = -1;
   }
-  bool up() const { return pid_ > 0 && port_answers(port_); }
+  bool up() const { return pid_ > 0 && listens_on(pid_, port_) && port_answers(port_); }
   int port() const { return port_; }
   // A hung Redis: the kernel still accepts connections and takes commands, nothing answers.
   void pause() const { kill(pid_, SIGSTOP); }
   void resume() const { kill(pid_, SIGCONT); }
 
  private:
-  int port_;
+  void start(const std::string& policy, const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"redis-server", "--port", std::to_string(port_), "--bind", "127.0.0.1", "--save", "",
+                                     "--appendonly", "no", "--maxmemory", "8mb", "--maxmemory-policy", policy,
+                                     "--loglevel", "warning", "--dir", "/tmp"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    pid_ = fork();
+    if (pid_ == 0) {
+      const int null = open("/dev/null", O_WRONLY);  // Redis' start-up banner is not test output
+      dup2(null, 1);
+      execv("/usr/bin/redis-server", argv.data());
+      _exit(127);
+    }
+  }
+  // Until this process listens on the port (5 s at most); false when it exited (the port was
+  // taken) or never did.
+  bool wait_until_listening() {
+    int status = 0;
+    for (int i = 0; i < 100; ++i) {
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return false;
+      }
+      if (listens_on(pid_, port_)) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return false;
+  }
+
+  int port_ = -1;
   pid_t pid_ = -1;
 };
 
