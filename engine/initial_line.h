@@ -111,6 +111,7 @@ class FeaturePathCost {
  private:
   const PreparedMesh& mesh_;
   double floor_, sign_;
+  bool noisy_;  // the mesh's noise reaches kNoisyCreaseNoise
   std::uint32_t strength_of_ = UINT32_MAX;  // the vertex whose strength strength_v_ holds
   double strength_v_ = 0;
 };
@@ -134,8 +135,12 @@ inline double FeaturePathCost::operator()(std::uint32_t v, std::uint32_t k) {
   // (on skinny CAD triangles the vertex fields are unreliable, a dihedral angle is not).
   const auto crease = mesh_.curvature().crease[k];
   const bool on_crease = crease != 0 && (sign_ == 0 || crease == sign_);
-  // A chord across a face (CurvatureField::chord), or a crease of the other kind: no feature.
-  const bool chord = !on_crease && (crease != 0 || mesh_.curvature().chord[k]);
+  // A chord across a face (CurvatureField::chord), or a crease of the other kind: no feature. On
+  // a noisy mesh a crease's sign is not: noise folds the skinny faces along a crease, so a short
+  // edge of a convex crease can read concave, and a line refused it detours over noise-marked
+  // edges beside the crease (a wing nut's line, 1 edge length off it); there it weighs as its
+  // vertices' field says.
+  const bool chord = !on_crease && ((crease != 0 && !noisy_) || mesh_.curvature().chord[k]);
   const double strength = on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v_ + mesh_.feature_strength(w, sign_));
   return mesh_.neighbor_edge_lengths()[k] * (floor_ + (1 - floor_) * (1 - strength));
 }

@@ -174,6 +174,38 @@ TEST(InitialLine, MarchingFollowsEveryFandiskCreaseChain) {
   EXPECT_GE(checked, 10u);
 }
 
+// Ridge lines' costs of valley crease edges: on a clean part such an edge is no feature (its
+// whole length); on a noisy one, where folded skinny faces flip a crease's sign, it weighs as its
+// vertices' field says, like an unmarked edge.
+TEST(InitialLine, OnANoisyMeshACreaseOfTheOtherSignWeighsAsItsField) {
+  const std::string path = require_shared_mesh("fandisk.off");
+  if (path.empty()) return;
+  const RawMesh raw = read_mesh_file(path);
+  const InitialLineOptions options;
+  const double floor = options.feature_weight_floor;
+  for (const bool noisy : {false, true}) {
+    const auto mesh = prepare_mesh(noisy ? with_noise(raw, 0.1, 7) : raw);
+    ASSERT_EQ(mesh->curvature().noise >= kNoisyCreaseNoise, noisy) << "noise " << mesh->curvature().noise;
+    FeaturePathCost cost(*mesh, options, 1);
+    std::size_t valley_edges = 0, cheaper = 0;
+    for (std::uint32_t v = 0; v < mesh->n_vertices(); ++v)
+      for (auto k = mesh->neighbor_offsets()[v]; k < mesh->neighbor_offsets()[v + 1]; ++k) {
+        if (mesh->curvature().crease[k] != -1) continue;
+        const auto w = mesh->neighbors()[k];
+        const double length = mesh->neighbor_edge_lengths()[k];
+        const double field = 0.5 * (mesh->feature_strength(v, 1) + mesh->feature_strength(w, 1));
+        const double expected = noisy ? length * (floor + (1 - floor) * (1 - field)) : length;
+        EXPECT_NEAR(cost(v, k), expected, 1e-12 * length) << "edge " << v << "-" << w << (noisy ? " (noisy)" : " (clean)");
+        ++valley_edges;
+        cheaper += cost(v, k) < 0.99 * length;
+      }
+    EXPECT_GE(valley_edges, 20u);
+    if (noisy) {
+      EXPECT_GE(cheaper, 10u);
+    }
+  }
+}
+
 TEST(InitialLine, MarchingOnAFinePartBesideACoarseOneUsesTheLocalEdgeLength) {
   // A fine ridge (spacing 0.01) and, far away, a separate part with 1000-unit edges that make
   // the mesh's mean edge about 100 times the ridge's. Counted in mean edges, the 160-edge walk
