@@ -37,7 +37,8 @@
 // snake iterations per line (mean); ms = detect_feature_line's total per line (median); err =
 // lines that threw. The fitted curve's table adds, for CAD chains, how far the truth itself
 // zigzags about a smooth curve (truth_zigzag; a scanned part's chain does, and no smooth curve
-// can follow it), and sums the noisy CAD lines twice: all, and those on smooth creases.
+// can follow it), and sums the noisy CAD lines twice: all, and those on smooth creases; the lines
+// whose truth zigzags are measured against that truth smoothed along itself too (smoothed_chain).
 //
 // usage: bench_accuracy [--seeds N] [--quick] [--variant NAME] [--worst K] [--sizes N,..] [--no-cad]
 //   --sizes N,..    only these field sizes (n x n grids)
@@ -164,6 +165,8 @@ struct LineSpec {
   double unit = 1;
   /// CAD chains: how far the truth itself zigzags (truth_zigzag), in units; -1 otherwise.
   double zigzag = -1;
+  /// CAD chains: distance to the truth smoothed along itself (smoothed_chain), in units.
+  std::function<double(const Eigen::Vector3d&)> smoothed_distance;
 };
 
 /// Mean distance (in units) of each truth vertex from the quadratic through the two vertices on
@@ -195,6 +198,38 @@ double truth_zigzag(const std::vector<Eigen::Vector3d>& chain, bool closed, doub
     ++count;
   }
   return count > 0 ? sum / double(count) : 0;
+}
+
+/// The chain smoothed along itself: each vertex replaced by the quadratic (against arc length,
+/// least squares) through it and up to three vertices on either side (fewer near an open chain's
+/// ends), evaluated there (a Savitzky-Golay filter: a zigzag that alternates from vertex to vertex
+/// keeps 24% of its amplitude, a smooth curve's bends are kept). What a scanned part's zigzagging
+/// crease chain says of the smooth crease it samples.
+std::vector<Eigen::Vector3d> smoothed_chain(const std::vector<Eigen::Vector3d>& chain, bool closed) {
+  const std::ptrdiff_t n = std::ptrdiff_t(chain.size());
+  std::vector<Eigen::Vector3d> out = chain;
+  if (n < 5) return out;
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero(), rhs = Eigen::Matrix3d::Zero();
+    for (const int direction : {-1, 1}) {
+      double t = 0;
+      for (std::ptrdiff_t step = 1; step <= 3; ++step) {
+        const std::ptrdiff_t j = i + direction * step, previous = j - direction;
+        if (!closed && (j < 0 || j >= n)) break;
+        const auto& a = chain[std::size_t((previous + n) % n)];
+        const auto& b = chain[std::size_t((j + n) % n)];
+        t += direction * (b - a).norm();
+        const Eigen::Vector3d basis(1, t, t * t);
+        normal += basis * basis.transpose();
+        rhs += basis * b.transpose();
+      }
+    }
+    normal += Eigen::Vector3d(1, 0, 0) * Eigen::Vector3d(1, 0, 0).transpose();  // the vertex itself, t = 0
+    rhs += Eigen::Vector3d(1, 0, 0) * chain[std::size_t(i)].transpose();
+    const Eigen::FullPivLU<Eigen::Matrix3d> solver(normal);
+    if (solver.rank() == 3) out[std::size_t(i)] = solver.solve(rhs).row(0).transpose();
+  }
+  return out;
 }
 
 /// Mean distance from the truth chain's vertices to the nearest point of the (noisy) surface
@@ -293,6 +328,10 @@ LineSpec chain_line(const RawMesh& mesh, const std::vector<std::uint32_t>& chain
   line.truth_points = *truth;
   line.unit = unit;
   line.zigzag = truth_zigzag(*truth, closed, unit);
+  auto smoothed = std::make_shared<std::vector<Eigen::Vector3d>>(smoothed_chain(*truth, closed));
+  line.smoothed_distance = [smoothed, closed, unit](const Eigen::Vector3d& p) {
+    return distance_to_polyline(*smoothed, closed, p) / unit;
+  };
   return line;
 }
 
@@ -417,6 +456,9 @@ struct LineOutcome {
   double floor = -1;  ///< surface_floor (CAD chains), -1 otherwise
   double zigzag = -1; ///< LineSpec::zigzag
   FittedOutcome fitted;
+  /// CAD chains: the initial, refined and fitted lines' mean distances to the smoothed truth
+  /// (LineSpec::smoothed_distance); -1 otherwise.
+  double initial_smoothed = -1, refined_smoothed = -1, fitted_smoothed = -1;
   double inward = std::nan("");  ///< curved crests: the refined line's arc-length mean offset into the bend
   bool worse() const { return !failed && refined.mean > initial.mean + kWorseTolerance; }
 };
@@ -636,6 +678,12 @@ LineOutcome run_line(const PreparedMesh& mesh, const LineSpec& spec, const Varia
     out.floor = surface_floor(mesh, spec);
     out.zigzag = spec.zigzag;
     out.fitted = measure_fitted(r, spec.distance);
+    if (spec.smoothed_distance) {
+      out.initial_smoothed = arc_length_distance(r.initial_points, r.closed, spec.smoothed_distance).mean;
+      out.refined_smoothed = arc_length_distance(refined, r.closed, spec.smoothed_distance).mean;
+      if (out.fitted.present)
+        out.fitted_smoothed = arc_length_distance(r.fitted->points, r.fitted->closed, spec.smoothed_distance).mean;
+    }
     if (spec.inward) out.inward = arc_length_distance(refined, r.closed, spec.inward).mean;
     if (at.trace) trace_line(at.c.name, at.noise, at.seed, mesh.statistics().noise, r, refined, spec, out.floor);
   } catch (const std::exception& e) {
@@ -764,6 +812,7 @@ void print_summary(const BenchResults& results, const std::vector<Variant>& vari
 struct NoisyCadSums {
   double fitted = 0, initial = 0, refined = 0, above_floor = 0;
   std::size_t lines = 0, worse = 0;
+  std::size_t refined_worse = 0;  ///< refined lines worse than their initial line
 };
 
 // A truth chain zigzagging less than this (units, truth_zigzag) is a smooth crease: the fandisks',
@@ -778,7 +827,8 @@ void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& 
   std::printf("| variant | case | noise %% | lines | init mean | ref mean | fitted mean | fitted max | fitted/init | fitted/ref |"
               " floor | truth zigzag | fitted worse than ref | crease share | fallback share | averaged share | fitted ms |\n");
   std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-  std::map<std::size_t, NoisyCadSums> noisy_cad, smooth_truth;  // by variant
+  // By variant; zigzag_smoothed: the lines whose truth zigzags, against the truth smoothed.
+  std::map<std::size_t, NoisyCadSums> noisy_cad, smooth_truth, zigzag_smoothed;
   for (const auto& [key, row] : results.rows) {
     const Case& c = cases[key.case_index];
     const double noise = c.noise_levels[key.noise_index];
@@ -798,6 +848,13 @@ void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& 
         sums.above_floor += l.refined.mean - l.floor;
         ++sums.lines;
         sums.worse += l.fitted.distance.mean > l.refined.mean + kWorseTolerance;
+      }
+      if (c.group == "cad" && noise > 0 && l.zigzag >= kSmoothTruth && l.fitted_smoothed >= 0) {
+        NoisyCadSums& sums = zigzag_smoothed[key.variant_index];
+        sums.fitted += l.fitted_smoothed, sums.initial += l.initial_smoothed, sums.refined += l.refined_smoothed;
+        ++sums.lines;
+        sums.worse += l.fitted_smoothed > l.refined_smoothed + kWorseTolerance;
+        sums.refined_worse += l.refined_smoothed > l.initial_smoothed + kWorseTolerance;
       }
       fitted_max = std::max(fitted_max, l.fitted.distance.max);
       crease += l.fitted.crease_share, fallback += l.fitted.fallback_share, averaged += l.fitted.averaged_share;
@@ -829,6 +886,14 @@ void print_fitted_rows(const BenchResults& results, const std::vector<Variant>& 
   };
   print_sums("all lines", noisy_cad);
   print_sums("lines on smooth creases, truth zigzag < 0.1", smooth_truth);
+  // No floor against a truth that is not the clean mesh's own chain.
+  for (const auto& [variant, sums] : zigzag_smoothed)
+    std::printf("Noisy CAD, lines whose truth zigzags (>= 0.1) against it smoothed (smoothed_chain) (%zu), %s: "
+                "initial %.3f, refined %.3f, fitted %.3f per line; fitted / initial %.3f, refined / initial %.3f, "
+                "refined worse than initial %zu, fitted worse than refined %zu\n",
+                sums.lines, variants[variant].name.c_str(), sums.initial / double(sums.lines), sums.refined / double(sums.lines),
+                sums.fitted / double(sums.lines), sums.fitted / sums.initial, sums.refined / sums.initial, sums.refined_worse,
+                sums.worse);
 }
 
 // Mean over a row's lines of their mean offset into the bend (curved crests).
