@@ -243,11 +243,8 @@ TEST(Accuracy, NoisyCreasesAreNeverWorseThanTheInitialLine) {
     const std::size_t q = loop.size() / 4;
     request.keys = {loop[q / 2], loop[q], loop[q + q / 2 + 2]};
     const auto result = detect_feature_line(*mesh, request);
-    double initial = 0, refined = 0;
-    for (const auto& p : result.initial_points) initial += distance_to_polyline(truth, true, p);
-    for (const auto& p : result.refined) refined += distance_to_polyline(truth, true, p.position);
-    initial /= double(result.initial_points.size());
-    refined /= double(result.refined.size());
+    const double initial = mean_distance_to_polyline(result.initial_points, truth, true);
+    const double refined = mean_distance_to_polyline(refined_positions(result), truth, true);
     EXPECT_LE(refined, initial * 1.05 + 0.005 * unit) << "seed " << seed;
   }
 }
@@ -281,11 +278,8 @@ TEST(Accuracy, NoisyRealCadCreasesAreRefittedCloserToTheTrueCrease) {
     const auto truth = positions_of(raw, chain.vertices);
     const auto result = detect_feature_line(*mesh, chain_request(chain));
     for (const auto& piece : result.piece_reports) fitted += piece.kept == PieceKept::crease_fit;
-    double initial = 0, refined = 0;
-    for (const auto& p : result.initial_points) initial += distance_to_polyline(truth, chain.closed, p);
-    for (const auto& p : result.refined) refined += distance_to_polyline(truth, chain.closed, p.position);
-    initial /= double(result.initial_points.size());
-    refined /= double(result.refined.size());
+    const double initial = mean_distance_to_polyline(result.initial_points, truth, chain.closed);
+    const double refined = mean_distance_to_polyline(refined_positions(result), truth, chain.closed);
     initial_sum += initial;
     refined_sum += refined;
     worse += refined > initial + 0.002 * mean_edge_length(raw);
@@ -312,12 +306,8 @@ TEST(Accuracy, KeysOnANoisyCreaseRunAreFittedWithItUnlessKeptInPlace) {
     const auto moved = detect_feature_line(*mesh, request);
     request.options.crest.move_keys = false;
     const auto kept = detect_feature_line(*mesh, request);
-    auto mean_distance = [&](const FeatureLineResult& r) {
-      double sum = 0;
-      for (const auto& p : r.refined) sum += distance_to_polyline(truth, chain.closed, p.position);
-      return sum / double(r.refined.size());
-    };
-    moved_sum += mean_distance(moved), kept_sum += mean_distance(kept);
+    moved_sum += mean_distance_to_polyline(refined_positions(moved), truth, chain.closed);
+    kept_sum += mean_distance_to_polyline(refined_positions(kept), truth, chain.closed);
     for (const double d : kept.key_moves) EXPECT_EQ(d, 0.0) << "chain from vertex " << chain.vertices.front();
     const bool all_crease_runs = std::all_of(moved.piece_reports.begin(), moved.piece_reports.end(),
                                              [](const PieceReport& p) { return p.kept == PieceKept::crease_fit; });

@@ -5,6 +5,8 @@
 
 #include <Eigen/Geometry>
 
+#include "tests/support/accuracy_meshes.h"
+
 namespace featureline::testing {
 
 double total_turning(const std::vector<Eigen::Vector3d>& p) {
@@ -57,10 +59,20 @@ LineDistance arc_length_distance(const std::vector<Eigen::Vector3d>& points, boo
   return d;
 }
 
-std::vector<Eigen::Vector3d> refined_positions(const FeatureLineResult& result) {
+std::vector<Eigen::Vector3d> refined_positions(const FeatureLineResult& result) { return positions_of(result.refined); }
+
+std::vector<Eigen::Vector3d> positions_of(const std::vector<SurfacePoint>& points) {
   std::vector<Eigen::Vector3d> out;
-  for (const auto& p : result.refined) out.push_back(p.position);
+  for (const auto& p : points) out.push_back(p.position);
   return out;
+}
+
+double mean_distance_to_polyline(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& polyline,
+                                 bool closed) {
+  if (points.empty()) return 0;
+  double sum = 0;
+  for (const auto& p : points) sum += distance_to_polyline(polyline, closed, p);
+  return sum / double(points.size());
 }
 
 bool is_edge_path(const PreparedMesh& mesh, const std::vector<std::uint32_t>& path) {

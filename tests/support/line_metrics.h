@@ -33,6 +33,14 @@ LineDistance arc_length_distance(const std::vector<Eigen::Vector3d>& points, boo
 /// Positions of a result's refined points.
 std::vector<Eigen::Vector3d> refined_positions(const FeatureLineResult& result);
 
+/// Positions of surface points.
+std::vector<Eigen::Vector3d> positions_of(const std::vector<SurfacePoint>& points);
+
+/// Mean over `points` (each point once, not along arc length) of their distance to `polyline`
+/// (closing segment included when `closed`); 0 for no points.
+double mean_distance_to_polyline(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& polyline,
+                                 bool closed);
+
 /// True when consecutive vertices of `path` are mesh neighbours.
 bool is_edge_path(const PreparedMesh& mesh, const std::vector<std::uint32_t>& path);
 
