@@ -169,6 +169,34 @@ struct LineSpec {
   std::function<double(const Eigen::Vector3d&)> smoothed_distance;
 };
 
+/// The quadratic (against arc length, least squares) through the vertices of `chain` up to
+/// `reach` on either side of vertex i (fewer near an open chain's ends), and vertex i itself when
+/// `with_self`, evaluated at vertex i; nothing when it is undetermined.
+std::optional<Eigen::Vector3d> chain_quadratic_at(const std::vector<Eigen::Vector3d>& chain, bool closed, std::size_t i,
+                                                  int reach, bool with_self) {
+  const std::ptrdiff_t n = std::ptrdiff_t(chain.size());
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero(), rhs = Eigen::Matrix3d::Zero();
+  auto add = [&](double t, const Eigen::Vector3d& x) {
+    const Eigen::Vector3d basis(1, t, t * t);
+    normal += basis * basis.transpose();
+    rhs += basis * x.transpose();
+  };
+  if (with_self) add(0, chain[i]);
+  for (const int direction : {-1, 1}) {
+    double t = 0;
+    for (std::ptrdiff_t step = 1; step <= reach; ++step) {
+      const std::ptrdiff_t j = std::ptrdiff_t(i) + direction * step, previous = j - direction;
+      if (!closed && (j < 0 || j >= n)) break;
+      const auto& b = chain[std::size_t((j + n) % n)];
+      t += direction * (b - chain[std::size_t((previous + n) % n)]).norm();
+      add(t, b);
+    }
+  }
+  const Eigen::FullPivLU<Eigen::Matrix3d> solver(normal);
+  if (solver.rank() < 3) return std::nullopt;
+  return Eigen::Vector3d(solver.solve(rhs).row(0).transpose());
+}
+
 /// Mean distance (in units) of each truth vertex from the quadratic through the two vertices on
 /// either side of it (least squares against arc length, the vertex itself left out): near 0 on a
 /// crease that is a smooth curve, however it bends; a scanned part's crease chain that zigzags
@@ -180,55 +208,23 @@ double truth_zigzag(const std::vector<Eigen::Vector3d>& chain, bool closed, doub
   std::size_t count = 0;
   for (std::size_t i = 0; i < n; ++i) {
     if (!closed && (i < 2 || i + 2 >= n)) continue;
-    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-    Eigen::Matrix3d rhs = Eigen::Matrix3d::Zero();
-    for (const int offset : {-2, -1, 1, 2}) {
-      // Arc length from vertex i along the chain, in units.
-      double t = 0;
-      for (int step = 0; step != offset; step += offset > 0 ? 1 : -1) {
-        const std::size_t a = (i + n + std::size_t(step)) % n, b = (i + n + std::size_t(step + (offset > 0 ? 1 : -1))) % n;
-        t += (offset > 0 ? 1 : -1) * (chain[b] - chain[a]).norm() / unit;
-      }
-      const Eigen::Vector3d basis(1, t, t * t);
-      normal += basis * basis.transpose();
-      rhs += basis * chain[(i + n + std::size_t(offset)) % n].transpose();
+    if (const auto at_i = chain_quadratic_at(chain, closed, i, 2, false)) {
+      sum += (*at_i - chain[i]).norm() / unit;
+      ++count;
     }
-    const Eigen::Vector3d at_i = normal.ldlt().solve(rhs).row(0).transpose();
-    sum += (at_i - chain[i]).norm() / unit;
-    ++count;
   }
   return count > 0 ? sum / double(count) : 0;
 }
 
-/// The chain smoothed along itself: each vertex replaced by the quadratic (against arc length,
-/// least squares) through it and up to three vertices on either side (fewer near an open chain's
-/// ends), evaluated there (a Savitzky-Golay filter: a zigzag that alternates from vertex to vertex
-/// keeps 24% of its amplitude, a smooth curve's bends are kept). What a scanned part's zigzagging
-/// crease chain says of the smooth crease it samples.
+/// The chain smoothed along itself: each vertex replaced by the quadratic through it and up to
+/// three vertices on either side (chain_quadratic_at), evaluated there (a Savitzky-Golay filter: a
+/// zigzag that alternates from vertex to vertex keeps 24% of its amplitude, a smooth curve's bends
+/// are kept). What a scanned part's zigzagging crease chain says of the smooth crease it samples.
 std::vector<Eigen::Vector3d> smoothed_chain(const std::vector<Eigen::Vector3d>& chain, bool closed) {
-  const std::ptrdiff_t n = std::ptrdiff_t(chain.size());
   std::vector<Eigen::Vector3d> out = chain;
-  if (n < 5) return out;
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
-    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero(), rhs = Eigen::Matrix3d::Zero();
-    for (const int direction : {-1, 1}) {
-      double t = 0;
-      for (std::ptrdiff_t step = 1; step <= 3; ++step) {
-        const std::ptrdiff_t j = i + direction * step, previous = j - direction;
-        if (!closed && (j < 0 || j >= n)) break;
-        const auto& a = chain[std::size_t((previous + n) % n)];
-        const auto& b = chain[std::size_t((j + n) % n)];
-        t += direction * (b - a).norm();
-        const Eigen::Vector3d basis(1, t, t * t);
-        normal += basis * basis.transpose();
-        rhs += basis * b.transpose();
-      }
-    }
-    normal += Eigen::Vector3d(1, 0, 0) * Eigen::Vector3d(1, 0, 0).transpose();  // the vertex itself, t = 0
-    rhs += Eigen::Vector3d(1, 0, 0) * chain[std::size_t(i)].transpose();
-    const Eigen::FullPivLU<Eigen::Matrix3d> solver(normal);
-    if (solver.rank() == 3) out[std::size_t(i)] = solver.solve(rhs).row(0).transpose();
-  }
+  if (chain.size() < 5) return out;
+  for (std::size_t i = 0; i < chain.size(); ++i)
+    if (const auto at_i = chain_quadratic_at(chain, closed, i, 3, true)) out[i] = *at_i;
   return out;
 }
 
