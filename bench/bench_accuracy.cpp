@@ -524,8 +524,11 @@ using Clock = std::chrono::steady_clock;
 // --trace: what happened to one line, for finding out why it is off.
 void trace_line(const std::string& name, double noise, int seed, double estimated_noise, const FeatureLineResult& r,
                 const std::vector<Eigen::Vector3d>& refined, const LineSpec& spec, double floor) {
-  std::fprintf(stderr, "%s, noise %g%% (estimated %.3f), seed %d: initial %.3f, refined %.3f, floor %.3f\n", name.c_str(),
-               noise, estimated_noise, seed, arc_length_distance(r.initial_points, r.closed, spec.distance).mean,
+  std::string keys;
+  for (const auto k : spec.keys) keys += (keys.empty() ? "" : ",") + std::to_string(k);
+  std::fprintf(stderr, "%s, noise %g%% (estimated %.3f), seed %d, keys %s: initial %.3f, refined %.3f, floor %.3f\n",
+               name.c_str(), noise, estimated_noise, seed, keys.c_str(),
+               arc_length_distance(r.initial_points, r.closed, spec.distance).mean,
                arc_length_distance(refined, r.closed, spec.distance).mean, floor);
   for (const auto& w : r.warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
   for (const auto& p : r.piece_reports)

@@ -366,23 +366,27 @@ double angle_of(const AdjacencyView& adj, const EdgeAngles& angles, std::uint32_
   return k == kNoIndex ? 0 : angles.angle[k];
 }
 
+// +1 where the edge in entry k (from v) is convex, -1 where concave: the far corner of its
+// second face lies below the first face's plane. \pre an interior edge.
+std::int8_t edge_sign(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, const EdgeAngles& angles,
+                      std::uint32_t v, std::uint32_t k) {
+  const auto w = adj.neighbors[k];
+  const auto a = std::uint32_t(angles.corner_a[k]), b = std::uint32_t(angles.corner_b[k]);
+  const Eigen::Vector3d na = (P[w] - P[v]).cross(P[a] - P[v]);
+  return (P[b] - P[v]).dot(na) < 0 ? 1 : -1;
+}
+
 // An edge is a crease when its dihedral angle exceeds the threshold and stands out from its
 // faces' other four edges (the second largest of those under half its angle). A sharp bend
 // that crosses triangles instead of following edges spreads over a band of edges, none of
 // which is the crease; a CAD crease is one chain of edges between flat-ish faces (at a corner
-// one wing edge belongs to the other crease, hence the second largest). Convex when the far
-// corner of the second face lies below the first face's plane.
+// one wing edge belongs to the other crease, hence the second largest). Signed by edge_sign.
 void mark_creases(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, const EdgeAngles& angles,
                   double angle_degrees, CurvatureField& field) {
   field.crease.assign(adj.neighbors.size(), 0);
   field.crease_edges = 0;
   const double threshold = angle_degrees * kPi / 180;
-  const auto sign_of = [&](std::uint32_t v, std::size_t k) -> std::int8_t {
-    const auto w = adj.neighbors[k];
-    const auto a = std::uint32_t(angles.corner_a[k]), b = std::uint32_t(angles.corner_b[k]);
-    const Eigen::Vector3d na = (P[w] - P[v]).cross(P[a] - P[v]);
-    return (P[b] - P[v]).dot(na) < 0 ? 1 : -1;
-  };
+  const auto sign_of = [&](std::uint32_t v, std::uint32_t k) { return edge_sign(P, adj, angles, v, k); };
   std::vector<std::pair<std::uint32_t, std::uint32_t>> sharp_but_not_standing_out;  // (v, entry)
   for (std::uint32_t v = 0; v < P.size(); ++v)
     for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
@@ -419,6 +423,23 @@ void mark_creases(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& ad
   for (std::uint32_t v = 0; v < P.size(); ++v)
     for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k)
       if (field.crease[k] != 0 && v < adj.neighbors[k]) ++field.crease_edges;
+}
+
+// CurvatureField::fold: each edge's dihedral angle over the crease angle, signed as
+// mark_creases signs creases.
+std::vector<std::int8_t> signed_folds(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj,
+                                      const EdgeAngles& angles, double angle_degrees, Executor& executor) {
+  std::vector<std::int8_t> fold(adj.neighbors.size(), 0);
+  const double threshold = angle_degrees * kPi / 180;
+  executor.parallel_for(P.size(), kBlock, [&](std::size_t begin, std::size_t end, std::size_t) {
+    for (auto v = std::uint32_t(begin); v < end; ++v)
+      for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
+        if (angles.corner_a[k] < 0) continue;
+        const double share = std::min(1.0, angles.angle[k] / threshold);
+        fold[k] = std::int8_t(edge_sign(P, adj, angles, v, k) * std::lround(CurvatureField::kFoldScale * share));
+      }
+  });
+  return fold;
 }
 
 // The principal curvatures while they are smoothed: k_max and k_min side by side per vertex,
@@ -659,7 +680,14 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
               field.jet_degree);
     field.timings.jet_ms = lap_ms(clock);
   }
+  // Measured again rather than kept from the crease stage: the folds are only read on noisy
+  // meshes, and the angles would be held through the fits.
+  if (field.noise >= kNoisyCreaseNoise && field.crease_angle > 0)
+    field.fold = signed_folds(positions, adjacency, dihedral_angles(mesh, executor), field.crease_angle, executor);
+  else
+    field.fold.assign(adjacency.neighbors.size(), 0);
   field.chord = mark_chords(adjacency, field, barrier);
+  field.timings.creases_ms += lap_ms(clock);
   SmoothedField smoothed = start_smoothing(field, adjacency);
   if (options.smoothing_passes < 0) {
     field.smoothing_passes = field.noise < kExactSurfaceNoise

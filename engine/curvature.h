@@ -103,7 +103,7 @@ void check_curvature_options(const CurvatureOptions& options);
 /// Wall time of each part of the curvature stage, milliseconds (bench_pipeline prints them).
 struct CurvatureTimings {
   double mean_ms = 0;       ///< cotangent mean curvature
-  double creases_ms = 0;    ///< dihedral angles and crease marking
+  double creases_ms = 0;    ///< dihedral angles, crease marks, chords (and folds on noisy meshes)
   double noise_ms = 0;      ///< the probe fits that estimate the noise
   double jet_ms = 0;        ///< the jet fit of every vertex at the chosen radius
   double smoothing_ms = 0;  ///< smoothing passes and the roughness measurements deciding them
@@ -118,6 +118,13 @@ struct CurvatureField {
   /// +1 convex crease, -1 concave crease, 0 smooth edge.
   std::vector<std::int8_t> crease;
   std::vector<char> on_crease;  ///< per vertex: one of its edges is a crease
+  /// Per adjacency entry: how sharply the edge folds, its dihedral angle over the crease angle
+  /// (at most 1) in kFoldScale-ths, positive where convex; 0 on the border, and everywhere when
+  /// creases are off or the noise is under kNoisyCreaseNoise. A crease mark is yes or no; on a
+  /// noisy mesh the feature path reads the fold of the edges noise left unmarked
+  /// (engine/initial_line.h, kFoldFeatureShare).
+  std::vector<std::int8_t> fold;
+  static constexpr int kFoldScale = 127;
   /// Per adjacency entry: an edge joining two crease vertices without being a crease, a chord
   /// across a face (a CAD cap's long diagonal cutting a rounded corner), which the feature path
   /// reads as no feature. On a noisy mesh (noise at least kNoisyCreaseNoise) an edge between

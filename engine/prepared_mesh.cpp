@@ -394,7 +394,8 @@ std::size_t PreparedMesh::memory_bytes() const {
   bytes += t_.source_triangle.capacity() * sizeof(std::uint32_t) + t_.triangles.capacity() * 3 * sizeof(std::uint32_t);
   bytes += t_.positions.capacity() * sizeof(Eigen::Vector3d) + t_.vertex_normals.capacity() * sizeof(Eigen::Vector3d);
   bytes += (t_.curvature.mean.capacity() + t_.curvature.k_max.capacity() + t_.curvature.k_min.capacity()) * sizeof(double);
-  bytes += t_.curvature.crease.capacity() + t_.curvature.on_crease.capacity() + t_.curvature.chord.capacity();
+  bytes += t_.curvature.crease.capacity() + t_.curvature.on_crease.capacity() + t_.curvature.chord.capacity() +
+           t_.curvature.fold.capacity();
   bytes += t_.neighbor_offsets.capacity() * sizeof(std::uint32_t) + t_.neighbors.capacity() * sizeof(std::uint32_t);
   bytes += t_.neighbor_edge_lengths.capacity() * sizeof(double) + t_.component.capacity() * sizeof(std::int32_t);
   bytes += (t_.vertex_faces.offsets.capacity() + t_.vertex_faces.faces.capacity()) * sizeof(std::uint32_t);

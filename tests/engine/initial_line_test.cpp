@@ -206,6 +206,44 @@ TEST(InitialLine, OnANoisyMeshACreaseOfTheOtherSignWeighsAsItsField) {
   }
 }
 
+// Ridge lines' costs of unmarked edges folded convex at the crease angle or more (their wings as
+// sharp): on a noisy part a crease edge (the floor times the length), on a clean one what their
+// ends' field says; folded under kFoldFeatureShare of the angle, the field either way.
+TEST(InitialLine, OnANoisyMeshAnUnmarkedEdgeFoldedLikeACreaseWeighsAsOne) {
+  const std::string path = require_shared_mesh("fandisk.off");
+  if (path.empty()) return;
+  const RawMesh raw = read_mesh_file(path);
+  const InitialLineOptions options;
+  const double floor = options.feature_weight_floor;
+  for (const bool noisy : {false, true}) {
+    const auto mesh = prepare_mesh(noisy ? with_noise(raw, 0.1, 7) : raw);
+    const CurvatureField& field = mesh->curvature();
+    ASSERT_EQ(field.noise >= kNoisyCreaseNoise, noisy) << "noise " << field.noise;
+    FeaturePathCost cost(*mesh, options, 1);
+    std::size_t folded = 0, shallow = 0;
+    for (std::uint32_t v = 0; v < mesh->n_vertices(); ++v)
+      for (auto k = mesh->neighbor_offsets()[v]; k < mesh->neighbor_offsets()[v + 1]; ++k) {
+        if (field.crease[k] != 0 || field.chord[k]) continue;
+        const auto w = mesh->neighbors()[k];
+        const double length = mesh->neighbor_edge_lengths()[k];
+        const double field_strength = 0.5 * (mesh->feature_strength(v, 1) + mesh->feature_strength(w, 1));
+        const double by_field = length * (floor + (1 - floor) * (1 - field_strength));
+        const double share = field.fold[k] / double(CurvatureField::kFoldScale);
+        if (share >= 1) {
+          EXPECT_NEAR(cost(v, k), noisy ? floor * length : by_field, 1e-12 * length) << "edge " << v << "-" << w;
+          ++folded;
+        } else if (share < kFoldFeatureShare) {
+          EXPECT_NEAR(cost(v, k), by_field, 1e-12 * length) << "edge " << v << "-" << w;
+          ++shallow;
+        }
+      }
+    if (noisy) {
+      EXPECT_GE(folded, 10u);
+    }
+    EXPECT_GE(shallow, 1000u);
+  }
+}
+
 TEST(InitialLine, MarchingOnAFinePartBesideACoarseOneUsesTheLocalEdgeLength) {
   // A fine ridge (spacing 0.01) and, far away, a separate part with 1000-unit edges that make
   // the mesh's mean edge about 100 times the ridge's. Counted in mean edges, the 160-edge walk
