@@ -684,8 +684,6 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
   // meshes, and the angles would be held through the fits.
   if (field.noise >= kNoisyCreaseNoise && field.crease_angle > 0)
     field.fold = signed_folds(positions, adjacency, dihedral_angles(mesh, executor), field.crease_angle, executor);
-  else
-    field.fold.assign(adjacency.neighbors.size(), 0);
   field.chord = mark_chords(adjacency, field, barrier);
   field.timings.creases_ms += lap_ms(clock);
   SmoothedField smoothed = start_smoothing(field, adjacency);

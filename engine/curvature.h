@@ -119,9 +119,9 @@ struct CurvatureField {
   std::vector<std::int8_t> crease;
   std::vector<char> on_crease;  ///< per vertex: one of its edges is a crease
   /// Per adjacency entry: how sharply the edge folds, its dihedral angle over the crease angle
-  /// (at most 1) in kFoldScale-ths, positive where convex; 0 on the border, and everywhere when
-  /// creases are off or the noise is under kNoisyCreaseNoise. A crease mark is yes or no; on a
-  /// noisy mesh the feature path reads the fold of the edges noise left unmarked
+  /// (at most 1) in kFoldScale-ths, positive where convex, 0 on the border. Empty when creases
+  /// are off or the noise is under kNoisyCreaseNoise. A crease mark is yes or no; on a noisy
+  /// mesh the feature path reads the fold of the edges noise left unmarked
   /// (engine/initial_line.h, kFoldFeatureShare).
   std::vector<std::int8_t> fold;
   static constexpr int kFoldScale = 127;

@@ -125,6 +125,7 @@ class FeaturePathCost {
   const PreparedMesh& mesh_;
   double floor_, sign_;
   bool noisy_;  // the mesh's noise reaches kNoisyCreaseNoise
+  bool reads_folds_;  // noisy, with creases on (CurvatureField::fold)
   std::uint32_t strength_of_ = UINT32_MAX;  // the vertex whose strength strength_v_ holds
   double strength_v_ = 0;
 };
@@ -155,7 +156,7 @@ inline double FeaturePathCost::operator()(std::uint32_t v, std::uint32_t k) {
   // vertices' field says.
   const bool chord = !on_crease && ((crease != 0 && !noisy_) || mesh_.curvature().chord[k]);
   double strength = on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v_ + mesh_.feature_strength(w, sign_));
-  if (noisy_ && !on_crease && !chord) strength = std::max(strength, fold_strength(k));
+  if (reads_folds_ && !on_crease && !chord) strength = std::max(strength, fold_strength(k));
   return mesh_.neighbor_edge_lengths()[k] * (floor_ + (1 - floor_) * (1 - strength));
 }
 

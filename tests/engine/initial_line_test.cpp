@@ -206,9 +206,10 @@ TEST(InitialLine, OnANoisyMeshACreaseOfTheOtherSignWeighsAsItsField) {
   }
 }
 
-// Ridge lines' costs of unmarked edges folded convex at the crease angle or more (their wings as
-// sharp): on a noisy part a crease edge (the floor times the length), on a clean one what their
-// ends' field says; folded under kFoldFeatureShare of the angle, the field either way.
+// Ridge lines' costs of unmarked edges: on a noisy part one folded convex at the crease angle or
+// more (its wings as sharp) weighs as a crease edge (the floor times the length), one folded under
+// kFoldFeatureShare of the angle as its ends' field says; a clean part measures no folds, and
+// every unmarked edge weighs as its ends' field says.
 TEST(InitialLine, OnANoisyMeshAnUnmarkedEdgeFoldedLikeACreaseWeighsAsOne) {
   const std::string path = require_shared_mesh("fandisk.off");
   if (path.empty()) return;
@@ -228,7 +229,7 @@ TEST(InitialLine, OnANoisyMeshAnUnmarkedEdgeFoldedLikeACreaseWeighsAsOne) {
         const double length = mesh->neighbor_edge_lengths()[k];
         const double field_strength = 0.5 * (mesh->feature_strength(v, 1) + mesh->feature_strength(w, 1));
         const double by_field = length * (floor + (1 - floor) * (1 - field_strength));
-        const double share = field.fold[k] / double(CurvatureField::kFoldScale);
+        const double share = field.fold.empty() ? 0.0 : field.fold[k] / double(CurvatureField::kFoldScale);
         if (share >= 1) {
           EXPECT_NEAR(cost(v, k), noisy ? floor * length : by_field, 1e-12 * length) << "edge " << v << "-" << w;
           ++folded;
@@ -237,6 +238,7 @@ TEST(InitialLine, OnANoisyMeshAnUnmarkedEdgeFoldedLikeACreaseWeighsAsOne) {
           ++shallow;
         }
       }
+    EXPECT_EQ(field.fold.empty(), !noisy);
     if (noisy) {
       EXPECT_GE(folded, 10u);
     }
