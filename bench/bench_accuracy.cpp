@@ -46,8 +46,8 @@
 //   --cad-only      CAD cases only
 //   --no-curved     no arc and sine crests
 //   --curved-only   arc and sine crests only
-//   --trace         per line on stderr: distances, each piece's outcome, points along the line and
-//                   along its fitted curve
+//   --trace         per line on stderr: its keys and distances, each piece's outcome, points along
+//                   the line and along its fitted curve
 //   --seeds N       seeds for jitter and noise (default 3)
 //   --quick         fields n = 51 and 111 only, one seed, fandisk.off only (a few seconds)
 //   --variant NAME  run one variant of the table below
