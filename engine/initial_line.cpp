@@ -177,8 +177,7 @@ FeaturePathCost::FeaturePathCost(const PreparedMesh& mesh, const InitialLineOpti
     : mesh_(mesh),
       floor_(std::clamp(options.feature_weight_floor, 1e-6, 1.0)),
       sign_(feature_sign),
-      noisy_(mesh.curvature().noise >= kNoisyCreaseNoise),
-      reads_folds_(!mesh.curvature().fold.empty()) {}
+      noisy_(mesh.curvature().noise >= kNoisyCreaseNoise) {}
 
 std::optional<std::vector<std::uint32_t>> shortest_edge_path(const PreparedMesh& mesh, std::uint32_t from, std::uint32_t to,
                                                              bool feature_weighted, const InitialLineOptions& options,

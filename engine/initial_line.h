@@ -119,13 +119,13 @@ class FeaturePathCost {
   double floor() const { return floor_; }
 
  private:
-  // The strength an unmarked edge's fold gives it for lines of sign_ (kFoldFeatureShare).
+  // The strength an unmarked edge's fold gives it for lines of sign_ (kFoldFeatureShare); 0
+  // where no folds are measured (a clean mesh, or creases off).
   double fold_strength(std::uint32_t k) const;
 
   const PreparedMesh& mesh_;
   double floor_, sign_;
   bool noisy_;  // the mesh's noise reaches kNoisyCreaseNoise
-  bool reads_folds_;  // noisy, with creases on (CurvatureField::fold)
   std::uint32_t strength_of_ = UINT32_MAX;  // the vertex whose strength strength_v_ holds
   double strength_v_ = 0;
 };
@@ -156,12 +156,14 @@ inline double FeaturePathCost::operator()(std::uint32_t v, std::uint32_t k) {
   // vertices' field says.
   const bool chord = !on_crease && ((crease != 0 && !noisy_) || mesh_.curvature().chord[k]);
   double strength = on_crease ? 1.0 : chord ? 0.0 : 0.5 * (strength_v_ + mesh_.feature_strength(w, sign_));
-  if (reads_folds_ && !on_crease && !chord) strength = std::max(strength, fold_strength(k));
+  if (!on_crease && !chord) strength = std::max(strength, fold_strength(k));
   return mesh_.neighbor_edge_lengths()[k] * (floor_ + (1 - floor_) * (1 - strength));
 }
 
 inline double FeaturePathCost::fold_strength(std::uint32_t k) const {
-  const double fold = mesh_.curvature().fold[k] / double(CurvatureField::kFoldScale);
+  const auto& folds = mesh_.curvature().fold;
+  if (folds.empty()) return 0;
+  const double fold = folds[k] / double(CurvatureField::kFoldScale);
   const double share = sign_ == 0 ? std::abs(fold) : fold * sign_;
   return std::clamp((share - kFoldFeatureShare) / (1 - kFoldFeatureShare), 0.0, 1.0);
 }
