@@ -357,6 +357,9 @@ const OptionTable<FeatureSeedOptions>& feature_seed_option_table() {
                 "are left out", "--min-chain-edges", &O::min_chain_edges),
       option<O>("corner_angle", within(O::corner_angle_range), "A crease chain is split where it turns by more than "
                 "this many degrees (180: only where creases meet)", "--corner-angle", &O::corner_angle),
+      option<O>("junction_turn", within(O::junction_turn_range), "Where creases meet, a chain goes on through the two "
+                "that turn least when they turn by at most this many degrees and clearly less than any other (0: "
+                "split at every junction)", "--junction-turn", &O::junction_turn),
       option<O>("max_vertices_per_sign", within(O::max_vertices_per_sign_range, kEngineEnd, kMaxVerticesPerSignCap),
                 "Ridge vertices returned, and as many valley vertices, strongest first (0: none)", "--max-seeds",
                 &O::max_vertices_per_sign),

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <tuple>
 
 #include <Eigen/Dense>
 
@@ -18,6 +19,7 @@ void check_feature_seed_options(const FeatureSeedOptions& options) {
   check(O::max_crease_chains_range, options.max_crease_chains, "max_crease_chains");
   check(O::min_chain_edges_range, options.min_chain_edges, "min_chain_edges");
   check(O::corner_angle_range, options.corner_angle, "corner_angle");
+  check(O::junction_turn_range, options.junction_turn, "junction_turn");
   check(O::max_vertices_per_sign_range, options.max_vertices_per_sign, "max_vertices_per_sign");
   check(O::spacing_range, options.spacing, "spacing");
   check(O::crease_clearance_range, options.crease_clearance, "crease_clearance");
@@ -86,35 +88,81 @@ SignedCreaseEdges signed_crease_edges(const PreparedMesh& mesh, std::int8_t sign
   return edges;
 }
 
-// Maximal chains of the crease edges of `sign`, split at junctions and sharp corners, appended
-// to `chains` (vertices, closed, sign and length; the dihedral angle is measured later, for the
-// chains returned only).
-void walk_crease_chains(const PreparedMesh& mesh, FeatureSign sign, double corner_radians,
-                        std::vector<CreaseChainSeed>& chains, FeatureSeedStatistics& stats, const Cancellation* cancel) {
+// The turn (radians) a chain makes at v coming in along edge (a, v) and going out along (v, b).
+double turn_at(const PreparedMesh& mesh, std::uint32_t a, std::uint32_t v, std::uint32_t b) {
   const auto& P = mesh.positions();
-  const std::size_t n = mesh.n_vertices();
-  const SignedCreaseEdges edges = signed_crease_edges(mesh, std::int8_t(crease_sign_value(sign)));
-  if (edges.entries.empty()) return;
-  std::vector<char> split(n, 0);
-  for (std::uint32_t v = 0; v < n; ++v) {
+  return angle_between(P[v] - P[a], P[b] - P[v]);
+}
+
+// Which crease edges of a junction v a chain goes on through (FeatureSeedOptions::
+// junction_turn): pairs of v's entries, the straightest first, each taken while both its edges
+// are free, it turns at most `max_turn`, and every rival pair (one of its edges with another free
+// edge) turns kJunctionMarginDegrees more, a rival edge beside the other one (a face's second
+// edge marked by noise) excepted.
+void pair_junction(const PreparedMesh& mesh, const SignedCreaseEdges& edges, std::uint32_t v, double max_turn,
+                   std::vector<std::uint32_t>& partner) {
+  const auto begin = edges.offsets[v], end = edges.offsets[v + 1];
+  auto end_of = [&](std::uint32_t i) { return mesh.neighbors()[edges.entries[i]]; };
+  std::vector<std::tuple<double, std::uint32_t, std::uint32_t>> pairs;
+  for (auto i = begin; i < end; ++i)
+    for (auto j = i + 1; j < end; ++j) pairs.emplace_back(turn_at(mesh, end_of(i), v, end_of(j)), i, j);
+  std::sort(pairs.begin(), pairs.end());
+  const double margin = kJunctionMarginDegrees * kPi / 180;
+  auto is_free = [&](std::uint32_t i) { return partner[edges.entries[i]] == kNoIndex; };
+  for (const auto& [turn, i, j] : pairs) {
+    if (turn > max_turn) break;
+    if (!is_free(i) || !is_free(j)) continue;
+    bool clear = true;
+    for (auto r = begin; r < end && clear; ++r) {
+      if (r == i || r == j || !is_free(r)) continue;
+      clear = (turn_at(mesh, end_of(i), v, end_of(r)) >= turn + margin || mesh.are_neighbors(end_of(j), end_of(r))) &&
+              (turn_at(mesh, end_of(r), v, end_of(j)) >= turn + margin || mesh.are_neighbors(end_of(i), end_of(r)));
+    }
+    if (!clear) continue;
+    partner[edges.entries[i]] = edges.entries[j];
+    partner[edges.entries[j]] = edges.entries[i];
+  }
+}
+
+// Per adjacency entry v -> w of a crease edge of the sign: the entry v -> u a chain arriving at
+// v from w leaves by (kNoIndex: the chain ends at v). Counts junctions and corners.
+std::vector<std::uint32_t> chain_partners(const PreparedMesh& mesh, const SignedCreaseEdges& edges, double corner_radians,
+                                          double junction_radians, FeatureSeedStatistics& stats) {
+  std::vector<std::uint32_t> partner(mesh.neighbors().size(), kNoIndex);
+  for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
     const std::size_t degree = edges.degree(v);
-    if (degree == 0) continue;
-    if (degree != 2) {
-      split[v] = 1;
-      stats.junctions += degree > 2;
+    if (degree > 2) {
+      ++stats.junctions;
+      pair_junction(mesh, edges, v, junction_radians, partner);
+    }
+    if (degree != 2) continue;
+    const auto i = edges.entries[edges.offsets[v]], j = edges.entries[edges.offsets[v] + 1];
+    if (turn_at(mesh, mesh.neighbors()[i], v, mesh.neighbors()[j]) > corner_radians) {
+      ++stats.corners;
       continue;
     }
-    const auto a = mesh.neighbors()[edges.entries[edges.offsets[v]]], b = mesh.neighbors()[edges.entries[edges.offsets[v] + 1]];
-    if (angle_between(P[v] - P[a], P[b] - P[v]) > corner_radians) split[v] = 1, ++stats.corners;
+    partner[i] = j;
+    partner[j] = i;
   }
+  return partner;
+}
+
+// Maximal chains of the crease edges of `sign`, split where chain_partners ends them, appended
+// to `chains` (vertices, closed, sign and length; the dihedral angle is measured later, for the
+// chains returned only).
+void walk_crease_chains(const PreparedMesh& mesh, FeatureSign sign, double corner_radians, double junction_radians,
+                        std::vector<CreaseChainSeed>& chains, FeatureSeedStatistics& stats, const Cancellation* cancel) {
+  const SignedCreaseEdges edges = signed_crease_edges(mesh, std::int8_t(crease_sign_value(sign)));
+  if (edges.entries.empty()) return;
+  const std::vector<std::uint32_t> partner = chain_partners(mesh, edges, corner_radians, junction_radians, stats);
   std::vector<char> used(mesh.neighbors().size(), 0);
   auto mark_used = [&](std::uint32_t v, std::uint32_t k) {
     used[k] = 1;
     const auto twin = entry_of(mesh, mesh.neighbors()[k], v);
     if (twin != kNoIndex) used[twin] = 1;
   };
-  // From `start` along entry k until a split vertex or back at `start`; every step uses an
-  // unused edge, so a walk ends within the number of crease edges.
+  // From `start` along entry k until the chain ends or comes back to `start`; every step uses
+  // an unused edge, so a walk ends within the number of crease edges.
   auto walk = [&](std::uint32_t start, std::uint32_t k) {
     CreaseChainSeed chain;
     chain.sign = sign;
@@ -129,25 +177,24 @@ void walk_crease_chains(const PreparedMesh& mesh, FeatureSign sign, double corne
         break;
       }
       chain.vertices.push_back(next);
-      if (split[next]) break;
-      std::uint32_t following = kNoIndex;
-      for (auto i = edges.offsets[next]; i < edges.offsets[next + 1] && following == kNoIndex; ++i)
-        if (!used[edges.entries[i]]) following = edges.entries[i];
-      if (following == kNoIndex) break;
+      const auto arrival = entry_of(mesh, next, current);
+      const auto following = arrival == kNoIndex ? kNoIndex : partner[arrival];
+      if (following == kNoIndex || used[following]) break;
       current = next;
       k = following;
     }
     chains.push_back(std::move(chain));
   };
-  for (std::uint32_t v = 0; v < n; ++v) {
-    if ((v & 4095) == 0) throw_if_cancelled(cancel);
-    if (!split[v]) continue;
-    for (auto i = edges.offsets[v]; i < edges.offsets[v + 1]; ++i)
-      if (!used[edges.entries[i]]) walk(v, edges.entries[i]);
-  }
-  // Cycles without a split vertex: from their lowest id towards its lower neighbour.
-  for (std::uint32_t v = 0; v < n; ++v)
-    if (edges.degree(v) == 2 && !used[edges.entries[edges.offsets[v]]]) walk(v, edges.entries[edges.offsets[v]]);
+  // Chains with ends first, from their ends (by vertex id, then neighbour id); what is left are
+  // cycles, each from its lowest vertex towards that vertex's lower neighbour.
+  for (const bool ends : {true, false})
+    for (std::uint32_t v = 0; v < mesh.n_vertices(); ++v) {
+      if ((v & 4095) == 0) throw_if_cancelled(cancel);
+      for (auto i = edges.offsets[v]; i < edges.offsets[v + 1]; ++i) {
+        const auto k = edges.entries[i];
+        if (!used[k] && (!ends || partner[k] == kNoIndex)) walk(v, k);
+      }
+    }
 }
 
 double length_weighted_dihedral_degrees(const PreparedMesh& mesh, const CreaseChainSeed& chain) {
@@ -338,8 +385,9 @@ FeatureSeeds find_feature_seeds(const PreparedMesh& mesh, const FeatureSeedOptio
   FeatureSeedStatistics& stats = seeds.stats;
 
   std::vector<CreaseChainSeed> chains;
-  const double corner_radians = options.corner_angle * kPi / 180;
-  for (auto sign : {FeatureSign::ridge, FeatureSign::valley}) walk_crease_chains(mesh, sign, corner_radians, chains, stats, cancel);
+  const double corner_radians = options.corner_angle * kPi / 180, junction_radians = options.junction_turn * kPi / 180;
+  for (auto sign : {FeatureSign::ridge, FeatureSign::valley})
+    walk_crease_chains(mesh, sign, corner_radians, junction_radians, chains, stats, cancel);
   const auto too_short = [&](const CreaseChainSeed& c) { return c.edges() < std::size_t(options.min_chain_edges); };
   const auto kept_end = std::stable_partition(chains.begin(), chains.end(), [&](const auto& c) { return !too_short(c); });
   stats.short_chains = std::size_t(chains.end() - kept_end);

@@ -33,6 +33,11 @@ struct EnumNames<FeatureSign> {
       {{FeatureSign::ridge, "ridge"}, {FeatureSign::valley, "valley"}}};
 };
 
+/// Where creases meet, the branch a line or chain goes on along turns at least this many degrees
+/// less than any rival (FeatureSeedOptions::junction_turn, TraceOptions::follow_junctions);
+/// otherwise which branch is meant is the user's choice.
+constexpr double kJunctionMarginDegrees = 15;
+
 struct FeatureSeedOptions {
   /// At most this many crease chains are returned (the longest first); 0 returns none.
   int max_crease_chains = 64;
@@ -42,6 +47,13 @@ struct FeatureSeedOptions {
   /// A chain is split at a vertex where it turns by more than this many degrees between its two
   /// edges there (a sharp corner of one crease); 180 splits only at junctions.
   double corner_angle = 60;
+  /// Where three or more crease edges of one sign meet (a junction), a chain goes on through the
+  /// two that turn least, when they turn by at most this many degrees and every other edge
+  /// turns kJunctionMarginDegrees more from either (noise marking a face's second edge beside the
+  /// crease is no rival), as a traced line goes on through a junction (engine/trace.h): a T's
+  /// straight crease is one chain, and on a noisy scan a crease is not cut wherever noise marks
+  /// an edge beside it. 0 splits every chain at every junction.
+  double junction_turn = 45;
   /// At most this many ridge vertices, and as many valley vertices, are returned (the strongest
   /// first); 0 returns none.
   int max_vertices_per_sign = 32;
@@ -66,6 +78,7 @@ struct FeatureSeedOptions {
   static constexpr ValidRange max_crease_chains_range = finite_from(0);
   static constexpr ValidRange min_chain_edges_range = finite_from(1);
   static constexpr ValidRange corner_angle_range = closed_range(0, 180);
+  static constexpr ValidRange junction_turn_range = closed_range(0, 180);
   static constexpr ValidRange max_vertices_per_sign_range = finite_from(0);
   static constexpr ValidRange spacing_range = finite_from(0);
   static constexpr ValidRange crease_clearance_range = finite_from(0);
@@ -129,8 +142,9 @@ struct FeatureSeeds {
 /// Crease chains and ridge and valley seeds of `mesh`.
 ///
 /// Crease chains: the crease edges of each sign (PreparedMesh::curvature.crease) joined into
-/// maximal chains, split at vertices where the number of crease edges of that sign is not 2 and
-/// where the chain turns by more than options.corner_angle. A cycle with no such vertex is one
+/// maximal chains, split at vertices where the number of crease edges of that sign is not 2
+/// (unless a junction's straightest pair goes on, options.junction_turn) and where the chain
+/// turns by more than options.corner_angle. A cycle with no such vertex is one
 /// closed chain from its lowest vertex id; a walk that returns to its split vertex is closed too.
 ///
 /// Ridge and valley seeds: vertices more than crease_clearance rings from creases and the

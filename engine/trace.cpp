@@ -31,9 +31,7 @@ namespace {
 // A seed must be on a crest: the field a few steps across it is at least this share lower than
 // along it. A sphere's or a cylinder's field does not fall at all (nothing to follow there).
 constexpr double kMinCrestFall = 0.05;
-// At a junction the branch followed must turn this much less than the next best (radians), or
-// the choice is the user's.
-constexpr double kJunctionMargin = 15 * kPi / 180;
+constexpr double kJunctionMargin = kJunctionMarginDegrees * kPi / 180;
 
 double sign_value(FeatureSign sign) { return sign == FeatureSign::ridge ? 1.0 : -1.0; }
 
