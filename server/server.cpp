@@ -436,19 +436,19 @@ struct FeaturelineServer::Impl {
   // ---- routes (the one table) -------------------------------------------------------------
   void register_routes() {
     const std::string mesh = std::string(kMeshesPath) + "/([^/]+)";
-    http.Post(kMeshesPath, guarded_with_body(kMeshesPath, [this](const auto& req, auto& res, const auto& reader, bool& body_read) {
+    http.Post(served("POST", kMeshesPath), guarded_with_body(kMeshesPath, [this](const auto& req, auto& res, const auto& reader, bool& body_read) {
       upload(req, res, reader, body_read);
     }));
-    http.Get(mesh, guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
+    http.Get(served("GET", mesh), guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
       if (req.get_header_value(kFrontHeader) == "uploaded") return prepare_handed_off(req.matches[1], res);
       write_json(res, 200, describe(*session_or_404(req.matches[1])));
     }));
-    http.Delete(mesh, guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
+    http.Delete(served("DELETE", mesh), guarded("/v1/meshes/{id}", [this](const auto& req, auto& res) {
       auto why = DurableSessions::Gone::unknown;
       if (!sessions.erase(req.matches[1], &why)) throw not_found(req.matches[1], why);
       res.status = 204;
     }));
-    http.Get(mesh + "/mesh\\.glb", guarded("/v1/meshes/{id}/mesh.glb", [this](const auto& req, auto& res) {
+    http.Get(served("GET", mesh + "/mesh\\.glb"), guarded("/v1/meshes/{id}/mesh.glb", [this](const auto& req, auto& res) {
       auto session = session_or_404(req.matches[1]);
       const bool compact = compact_glb_requested(req);
       std::string glb = jobs.run([session, compact](const Cancellation*) {
@@ -458,7 +458,7 @@ struct FeaturelineServer::Impl {
       // The page's largest download: gzip when accepted (httplib compresses no model/* type).
       set_content_gzip_if_accepted(req, res, std::move(glb), export_format_info(ExportFormat::glb).mime_type);
     }));
-    http.Get(mesh + "/features", guarded("/v1/meshes/{id}/features", [this](const auto& req, auto& res) {
+    http.Get(served("GET", mesh + "/features"), guarded("/v1/meshes/{id}/features", [this](const auto& req, auto& res) {
       // Crease chains and ridge/valley vertices to pick keys from; options as query parameters.
       auto session = session_or_404(req.matches[1]);
       const FeatureSeedOptions seed_options = parse_feature_seed_query({req.params.begin(), req.params.end()});
@@ -466,29 +466,29 @@ struct FeaturelineServer::Impl {
         return feature_seeds_to_json(*session->mesh, find_feature_seeds(*session->mesh, seed_options, cancel));
       }));
     }));
-    http.Get(mesh + "/curvature", guarded("/v1/meshes/{id}/curvature", [this](const auto& req, auto& res) {
+    http.Get(served("GET", mesh + "/curvature"), guarded("/v1/meshes/{id}/curvature", [this](const auto& req, auto& res) {
       curvature(req, res);
     }));
-    http.Post(mesh + "/feature-lines", with_json_body("/v1/meshes/{id}/feature-lines", [this](const auto& req, JsonBody& body, auto& res) {
+    http.Post(served("POST", mesh + "/feature-lines"), with_json_body("/v1/meshes/{id}/feature-lines", [this](const auto& req, JsonBody& body, auto& res) {
       feature_lines(req, body, res);
     }));
-    http.Post(mesh + "/segmentation", with_json_body("/v1/meshes/{id}/segmentation", [this](const auto& req, JsonBody& body, auto& res) {
+    http.Post(served("POST", mesh + "/segmentation"), with_json_body("/v1/meshes/{id}/segmentation", [this](const auto& req, JsonBody& body, auto& res) {
       segmentation(req, body, res);
     }));
-    http.Get("/v1/options", guarded("/v1/options", [](const auto&, auto& res) {
+    http.Get(served("GET", "/v1/options"), guarded("/v1/options", [](const auto&, auto& res) {
       // Every option with its type, default, limits and description (the page's inputs use it).
       static const std::string description = describe_api_options().dump();
       res.set_header("Cache-Control", "public, max-age=3600");
       res.set_content(description, "application/json");
     }));
-    http.Get("/healthz", guarded("/healthz", [this](const auto&, auto& res) {
+    http.Get(served("GET", "/healthz"), guarded("/healthz", [this](const auto&, auto& res) {
       write_json(res, 200,
                  {{"status", "ok"},
                   {"meshes", cache.stats().entries},
                   {"uptime_s", std::chrono::duration<double>(Clock::now() - started).count()}});
     }));
-    http.Get("/readyz", guarded("/readyz", [this](const auto&, auto& res) { write_json(res, 200, readiness()); }));
-    http.Get("/metrics", guarded("/metrics", [this](const auto&, auto& res) {
+    http.Get(served("GET", "/readyz"), guarded("/readyz", [this](const auto&, auto& res) { write_json(res, 200, readiness()); }));
+    http.Get(served("GET", "/metrics"), guarded("/metrics", [this](const auto&, auto& res) {
       res.set_content(metrics.render(gauges()), "text/plain; version=0.0.4");
     }));
     http.Options(".*", guarded("OPTIONS", [this](const auto& req, auto& res) {
@@ -500,7 +500,45 @@ struct FeaturelineServer::Impl {
         res.set_header("Access-Control-Max-Age", "600");
       }
     }));
+    refuse_unserved_methods();
     register_page();
+  }
+
+  // The methods each route pattern serves, as registered (served()); refuse_unserved_methods
+  // answers the others.
+  std::vector<std::pair<std::string, std::vector<std::string>>> route_methods;
+
+  const std::string& served(const char* method, const std::string& pattern) {
+    auto it = std::find_if(route_methods.begin(), route_methods.end(), [&](const auto& r) { return r.first == pattern; });
+    if (it == route_methods.end()) it = route_methods.insert(route_methods.end(), {pattern, {}});
+    it->second.push_back(method);
+    return it->first;
+  }
+
+  // A method a route does not serve is 405 with the methods it does in Allow (RFC 9110 15.5.6),
+  // so a client can tell a wrong method from a missing mesh or a mistyped path. HEAD comes with
+  // GET, and OPTIONS (CORS preflight) is served everywhere. Registered before the page's
+  // catch-all GET, which would otherwise answer a GET of a POST route with 404.
+  void refuse_unserved_methods() {
+    for (const auto& [pattern, methods] : route_methods) {
+      std::string allow;
+      for (const auto& m : methods) allow += (allow.empty() ? "" : ", ") + m + (m == "GET" ? ", HEAD" : "");
+      allow += ", OPTIONS";
+      auto refusal = [allow](const httplib::Request& req) {
+        return HttpError(405, "method_not_allowed", req.method + " is not served here; this route serves " + allow,
+                         {{"Allow", allow}});
+      };
+      auto refuse = guarded("method not allowed", [refusal](const auto& req, auto&) { throw refusal(req); });
+      // A body sent with a refused method is never read (the connection closes instead).
+      auto refuse_body = guarded_with_body("method not allowed",
+                                           [refusal](const auto& req, auto&, const auto&, bool&) { throw refusal(req); });
+      auto has = [&](const char* m) { return std::find(methods.begin(), methods.end(), m) != methods.end(); };
+      if (!has("GET")) http.Get(pattern, refuse);
+      if (!has("POST")) http.Post(pattern, refuse_body);
+      if (!has("PUT")) http.Put(pattern, refuse_body);
+      if (!has("PATCH")) http.Patch(pattern, refuse_body);
+      if (!has("DELETE")) http.Delete(pattern, refuse);
+    }
   }
 
   // The page: a folder given with --web-root, else the copy compiled into the binary.

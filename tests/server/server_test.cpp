@@ -121,6 +121,30 @@ TEST(InProcessServer, ABadOptionIs400WithTheExactMessage) {
   EXPECT_EQ(json::parse(r->body)["segments"].size(), 2u);  // a border-to-border line: two parts
 }
 
+TEST(InProcessServer, AnUnservedMethodIs405NamingTheServedOnesInAllow) {
+  RunningServer server({});
+  auto client = server.client();
+  const std::string mesh = "/v1/meshes/" + server.mesh_id();
+  auto expect_405 = [](const httplib::Result& r, const std::string& allow) {
+    ASSERT_TRUE(r) << httplib::to_string(r.error());
+    EXPECT_EQ(r->status, 405) << r->body;
+    EXPECT_EQ(r->get_header_value("Allow"), allow);
+    EXPECT_EQ(error_of(r)["code"], "method_not_allowed");
+  };
+  expect_405(client.Put(mesh.c_str(), "{}", "application/json"), "GET, HEAD, DELETE, OPTIONS");
+  expect_405(client.Get((mesh + "/feature-lines").c_str()), "POST, OPTIONS");
+  expect_405(client.Delete("/v1/meshes"), "POST, OPTIONS");
+  expect_405(client.Post("/healthz", "x", "text/plain"), "GET, HEAD, OPTIONS");
+  expect_405(client.Patch((mesh + "/segmentation").c_str(), "{}", "application/json"), "POST, OPTIONS");
+  // A path that is no route stays 404, and the served methods answer as before.
+  auto r = client.Get("/v1/nothing-here");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 404);
+  r = client.Get(mesh.c_str());
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+}
+
 TEST(InProcessServer, AnUnknownFormatIs415NamingEveryFormatTheReadersTake) {
   RunningServer server({});
   auto client = server.client();
