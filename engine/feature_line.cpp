@@ -592,8 +592,13 @@ void trace_initial_line(const PreparedMesh& pm, const FeatureLineRequest& reques
   if (request.keys.size() != 1)
     throw InvalidInputError("a traced line starts from exactly one key (" + std::to_string(request.keys.size()) + " given)");
   if (request.closed) throw InvalidInputError("a traced line is closed when its feature closes: \"closed\" must be left out");
+  // initial.max_edges bounds the trace too: a bound it leaves no trace under is named as set.
+  const int initial_max_edges = request.options.initial.max_edges;
+  if (!TraceOptions::max_edges_range.contains(initial_max_edges))
+    throw InvalidInputError("initial.max_edges must be at least " + format_number(TraceOptions::max_edges_range.min) +
+                            " for a traced line (" + std::to_string(initial_max_edges) + " given)");
   TraceOptions options = request.options.trace;
-  options.max_edges = std::min(options.max_edges, request.options.initial.max_edges);
+  options.max_edges = std::min(options.max_edges, initial_max_edges);
   result.trace = trace_feature(pm, request.keys.front(), options, request.cancel);
   result.initial = initial_line_from_trace(pm, *result.trace);
   result.closed = result.trace->closed;

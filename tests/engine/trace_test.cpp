@@ -269,6 +269,17 @@ TEST(Trace, RequestsAreChecked) {
   closed.trace = true;
   closed.closed = true;
   EXPECT_THROW(detect_feature_line(*mesh, closed), InvalidInputError);
+  // The initial line's bound, which bounds the trace too, is named as the request set it.
+  FeatureLineRequest one_edge;
+  one_edge.keys = {part.top_outline[0]};
+  one_edge.trace = true;
+  one_edge.options.initial.max_edges = 1;
+  try {
+    detect_feature_line(*mesh, one_edge);
+    ADD_FAILURE() << "a trace bounded to one edge was accepted";
+  } catch (const InvalidInputError& e) {
+    EXPECT_STREQ(e.what(), "initial.max_edges must be at least 2 for a traced line (1 given)");
+  }
 }
 
 TEST(Trace, SameAnswerEveryRun) {
