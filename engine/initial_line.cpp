@@ -281,6 +281,10 @@ InitialLineResult find_initial_line(const PreparedMesh& mesh, const std::vector<
     if (!closed || seg + 1 < segments) result.key_indices.push_back(result.vertices.size() - 1);
   }
   if (closed) result.vertices.pop_back();  // the loop's last vertex is its first key again
+  // Two neighbouring keys: the way back retraced their edge, a loop that encloses nothing.
+  if (closed && result.vertices.size() < 3)
+    throw GeometryError("a closed line through vertices " + std::to_string(keys[0]) + " and " + std::to_string(keys[1]) +
+                        " alone runs along their edge and back; give a third key on the loop");
   result.length = path_length(mesh, result.vertices, closed);
   return result;
 }

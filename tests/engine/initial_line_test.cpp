@@ -115,6 +115,15 @@ TEST(InitialLine, ClosedLoopDoesNotRetraceItself) {
   EXPECT_TRUE(is_edge_path(*mesh, line.vertices));
   EXPECT_GT(line.length, 0.9 * 2 * M_PI);  // around the circumference of radius 1
   EXPECT_EQ(line.key_indices.size(), 2u);
+  // Two neighbouring keys leave no way round that the search would take: the way back was
+  // their edge again, a loop of two vertices that encloses nothing. Refused, saying what to do.
+  try {
+    find_initial_line(*mesh, {ring[0], ring[1]}, true);
+    ADD_FAILURE() << "a loop of two neighbouring keys was accepted";
+  } catch (const GeometryError& e) {
+    EXPECT_EQ(std::string(e.what()), "a closed line through vertices " + std::to_string(ring[0]) + " and " +
+                                         std::to_string(ring[1]) + " alone runs along their edge and back; give a third key on the loop");
+  }
 }
 
 TEST(InitialLine, FollowsFandiskCreaseChainExactly) {
