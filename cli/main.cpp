@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cerrno>
 #include <fstream>
 #include <functional>
 #include <iostream>
@@ -443,12 +444,15 @@ struct Program {
   void add_segment() {
     auto* segment_command = app.add_subcommand("segment", "Cut a mesh into parts along closed lines (and open lines between them)");
     add_inputs(*segment_command, in, false);
-    segment_command->add_option("--loop", line.loops, "Keys of a closed line (repeatable)")->type_name("LIST");
-    segment_command->add_option("--line", line.open_lines, "Keys of an open line ending on the boundary or another line (repeatable)")
-        ->type_name("LIST");
+    auto* loops = segment_command->add_option("--loop", line.loops, "Keys of a closed line (repeatable)")->type_name("LIST");
+    auto* open_lines =
+        segment_command->add_option("--line", line.open_lines, "Keys of an open line ending on the boundary or another line (repeatable)")
+            ->type_name("LIST");
     segment_command->add_option("--request", line.request_path,
                                 "A request body of POST /v1/meshes/{id}/segmentation, FILE or - for standard input")
-        ->type_name("FILE");
+        ->type_name("FILE")
+        ->excludes(loops)
+        ->excludes(open_lines);
     segment_command->add_option("--weights", line.weights, "Marching weights of every line")->expected(4)->delimiter(',')->type_name("A,B,G,D");
     segment_command->add_option("--options", line.options_text, "Options of every line, as a JSON object")->type_name("JSON");
     add_table_flags(*segment_command, featureline::feature_line_option_table(), line.options, "Feature-line options (every line)");
@@ -495,7 +499,12 @@ int main(int argc, char** argv) {
   Program program;
   try {
     program.app.parse(argc, argv);
-    return program.run();
+    const int status = program.run();
+    // Standard output is buffered: a full disk shows only when it is flushed. A reader that
+    // stopped reading (| head) is no error, as for a tool that SIGPIPE ends quietly.
+    errno = 0;
+    if (!std::cout.flush() && errno != EPIPE) throw std::runtime_error("failed writing standard output");
+    return status;
   } catch (const CLI::Success& e) {
     return program.app.exit(e);  // --help, --version: standard output, exit 0
   } catch (const CLI::ParseError& e) {

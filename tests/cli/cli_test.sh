@@ -30,6 +30,12 @@ check "--curvature-radius out of range is a usage error (exit 2)" [ $rc = 2 ]
 check "--curvature-radius out of range: the range, then a pointer to --help" \
   [ "$(cat "$tmp/err")" = "$(printf '%s\n%s' 'featureline: "--curvature-radius" must be a number from 0 to 12' "Run 'featureline info --help' for usage.")" ]
 
+if [ -w /dev/full ]; then
+  "$FEATURELINE" info "$mesh" >/dev/full 2>"$tmp/err"; rc=$?
+  check "an answer standard output cannot take (a full disk) exits 1" [ $rc = 1 ]
+  check "... saying so" [ "$(cat "$tmp/err")" = "featureline: failed writing standard output" ]
+fi
+
 "$FEATURELINE" detect "$mesh" --keys 10,200,400 >"$tmp/line.json" 2>"$tmp/err"; rc=$?
 check "detect exits 0" [ $rc = 0 ]
 check "detect echoes the keys" [ "$(jq -c .keys "$tmp/line.json")" = "[10,200,400]" ]
@@ -106,6 +112,10 @@ check "a line that closes nothing exits 1" [ $rc = 1 ]
 check "and says so" grep -q "close no region" "$tmp/err"
 "$FEATURELINE" segment "$sample" --loop 700,705,750 --mode sideways >"$tmp/out" 2>"$tmp/err"; rc=$?
 check "unknown --mode exits 2" [ $rc = 2 ]
+echo '{"lines": [{"keys": [820, 860]}]}' >"$tmp/seg_request.json"
+"$FEATURELINE" segment "$sample" --loop 700,705,750 --request "$tmp/seg_request.json" >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "segment --loop with --request is a usage error (exit 2), not a line silently dropped" [ $rc = 2 ]
+check "... naming the two" [ "$(head -n 1 "$tmp/err")" = "featureline: --loop excludes --request" ]
 # Seeding keys without the page: fandisk's crease chains, and a line through a chain's ends.
 "$FEATURELINE" features "$mesh" >"$tmp/features.json"; rc=$?
 check "features exits 0" [ $rc = 0 ]
