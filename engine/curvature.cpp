@@ -376,17 +376,40 @@ std::int8_t edge_sign(const std::vector<Eigen::Vector3d>& P, const AdjacencyView
   return (P[b] - P[v]).dot(na) < 0 ? 1 : -1;
 }
 
+// Two faces whose normals differ by less than this (radians) lie in one plane: a CAD
+// tessellation's flat face cut into triangles.
+constexpr double kCoplanarAngle = 0.5 * kPi / 180;
+
+// Whether edge (v, w) is interior and its two faces lie in one plane.
+bool flat_wing(const AdjacencyView& adj, const EdgeAngles& angles, std::uint32_t v, std::uint32_t w) {
+  const auto k = entry_of(adj, v, w);
+  return k != kNoIndex && angles.corner_a[k] >= 0 && angles.angle[k] < kCoplanarAngle;
+}
+
 // An edge is a crease when its dihedral angle exceeds the threshold and stands out from its
 // faces' other four edges (the second largest of those under half its angle). A sharp bend
 // that crosses triangles instead of following edges spreads over a band of edges, none of
 // which is the crease; a CAD crease is one chain of edges between flat-ish faces (at a corner
-// one wing edge belongs to the other crease, hence the second largest). Signed by edge_sign.
+// one wing edge belongs to the other crease, hence the second largest). On a coarse CAD
+// tessellation (a cube of 12 triangles, a chamfered one) every triangle spans a whole side of
+// its flat face and touches two creases, so none stands out; there (on a flat-faced mesh) an
+// edge between two flat facets, not a band of bent triangles, is a crease too. Signed by edge_sign.
 void mark_creases(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& adj, const EdgeAngles& angles,
-                  double angle_degrees, CurvatureField& field) {
+                  double angle_degrees, bool flat_faced, CurvatureField& field) {
   field.crease.assign(adj.neighbors.size(), 0);
   field.crease_edges = 0;
   const double threshold = angle_degrees * kPi / 180;
   const auto sign_of = [&](std::uint32_t v, std::uint32_t k) { return edge_sign(P, adj, angles, v, k); };
+  // Whether the face (x, y, z), whose edge (z, x) is sharp, is a flat facet of a CAD part: it lies
+  // in one plane with a neighbour across (x, y) or (y, z); or a facet of one triangle (a
+  // chamfer's corner), all its edges sharp, which counts beside a flat facet only (on scans
+  // noise bends a triangle's three edges now and then).
+  const auto flat_facet = [&](std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    return flat_wing(adj, angles, x, y) || flat_wing(adj, angles, y, z);
+  };
+  const auto one_triangle_facet = [&](std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    return angle_of(adj, angles, x, y) > threshold && angle_of(adj, angles, y, z) > threshold;
+  };
   std::vector<std::pair<std::uint32_t, std::uint32_t>> sharp_but_not_standing_out;  // (v, entry)
   for (std::uint32_t v = 0; v < P.size(); ++v)
     for (auto k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
@@ -396,8 +419,10 @@ void mark_creases(const std::vector<Eigen::Vector3d>& P, const AdjacencyView& ad
       const auto a = std::uint32_t(angles.corner_a[k]), b = std::uint32_t(angles.corner_b[k]);
       std::array<double, 4> wings = {angle_of(adj, angles, w, a), angle_of(adj, angles, a, v),
                                      angle_of(adj, angles, v, b), angle_of(adj, angles, b, w)};
+      const bool facets = flat_faced && ((flat_facet(w, a, v) && (flat_facet(v, b, w) || one_triangle_facet(v, b, w))) ||
+                                         (flat_facet(v, b, w) && one_triangle_facet(w, a, v)));
       std::sort(wings.begin(), wings.end());
-      if (wings[2] >= 0.5 * angle) {
+      if (wings[2] >= 0.5 * angle && !facets) {
         sharp_but_not_standing_out.emplace_back(v, k);
         continue;
       }
@@ -599,6 +624,32 @@ double automatic_jet_radius(double noise, double diagonal_edges, double probe_ra
   return radius;
 }
 
+// The automatic crease angle (degrees) from the interior edges' dihedral angles (radians): 30,
+// or well above the angles noise makes on its own, 4 x the median edge's, when that reads more.
+// On a flat-faced mesh whose median edge is sharp anyway, the median is a crease's own angle,
+// not noise: a coarse CAD tessellation, most of whose edges are creases (a 12-triangle cube's
+// median edge is one of its 90-degree edges; it read 360). At most
+// CurvatureLimits::max_crease_angle, a dihedral angle (a tetrahedron read 438, degenerate files 720).
+double automatic_crease_angle(std::vector<double> interior, bool flat_faced) {
+  const double noise_angle = 4 * median_of(std::move(interior)) * 180 / kPi;
+  if (flat_faced && noise_angle > 90) return 30;
+  return std::clamp(noise_angle, 30.0, CurvatureLimits::max_crease_angle);
+}
+
+// A CAD tessellation's faces are flat: a quarter of its interior edges or more join two faces of
+// one plane (the fandisk's 80%, a 12-triangle cube's 33%; noisy meshes and scans far fewer).
+bool flat_faced(const std::vector<double>& interior) {
+  const auto flat = std::count_if(interior.begin(), interior.end(), [](double a) { return a < kCoplanarAngle; });
+  return 4 * std::size_t(flat) >= interior.size() && !interior.empty();
+}
+
+// Whether every interior edge that is no crease joins two faces of one plane.
+bool every_other_edge_flat(const AdjacencyView& adj, const EdgeAngles& angles, const std::vector<std::int8_t>& crease) {
+  for (std::size_t k = 0; k < adj.neighbors.size(); ++k)
+    if (crease[k] == 0 && angles.corner_a[k] >= 0 && !(angles.angle[k] < kCoplanarAngle)) return false;
+  return true;
+}
+
 }  // namespace
 
 void check_curvature_options(const CurvatureOptions& options) {
@@ -633,6 +684,7 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
   const std::vector<double> local = local_edge_lengths(adjacency);
   const double diagonal_edges = diagonal_in_edges(positions, local);
   // Creases: above 30 degrees, and well above the dihedral angles the noise makes on its own.
+  bool polyhedral = false;
   if (options.crease_angle >= 0) {
     const EdgeAngles angles = dihedral_angles(mesh, executor);
     std::vector<double> interior;  // one angle per interior edge
@@ -640,9 +692,10 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
     for (std::uint32_t v = 0; v < n; ++v)
       for (auto k = adjacency.offsets[v]; k < adjacency.offsets[v + 1]; ++k)
         if (angles.corner_a[k] >= 0 && v < adjacency.neighbors[k]) interior.push_back(angles.angle[k]);
-    const double noise_angle = 4 * median_of(std::move(interior)) * 180 / kPi;
-    field.crease_angle = options.crease_angle > 0 ? options.crease_angle : std::max(30.0, noise_angle);
-    mark_creases(positions, adjacency, angles, field.crease_angle, field);
+    const bool flat_faces = flat_faced(interior);
+    field.crease_angle = options.crease_angle > 0 ? options.crease_angle : automatic_crease_angle(std::move(interior), flat_faces);
+    mark_creases(positions, adjacency, angles, field.crease_angle, flat_faces, field);
+    polyhedral = field.crease_edges > 0 && every_other_edge_flat(adjacency, angles, field.crease);
   } else {
     field.crease.assign(adjacency.neighbors.size(), 0);
   }
@@ -663,6 +716,9 @@ CurvatureField compute_curvature_field(const MeshTablesView& mesh, const std::ve
     std::vector<double> residual =
         fit_all(positions, normals, adjacency, barrier, mesh.boundary_vertex, local, kProbeRadius, stride, field.mean, field,
                 cancel, executor);
+    // A polyhedron (every edge a crease or flat: a CAD part of flat faces) is exact: fits across
+    // its creases would read their kinks as noise (a 48-triangle cube: 0.41 edge lengths).
+    if (polyhedral) std::fill(residual.begin(), residual.end(), -1.0);
     std::vector<double> residual_length;
     for (std::size_t v = 0; v < n; ++v)
       if (residual[v] >= 0) residual_length.push_back(residual[v] * local[v]);

@@ -6,9 +6,11 @@
 #include <cmath>
 
 #include "engine/errors.h"
+#include "engine/mesh_io.h"
 #include "engine/prepared_mesh.h"
 #include "tests/support/accuracy_meshes.h"
 #include "tests/support/curved_crests.h"
+#include "tests/support/shared_data.h"
 #include "tests/support/synthetic_meshes.h"
 
 namespace featureline {
@@ -154,6 +156,36 @@ TEST(Curvature, NoiseMadeCreasesDoNotCutTheFitsShort) {
   ASSERT_GT(crest_creases, 0u) << "no noise-made crease on the crest: the case no longer tests the fits";
   const double typical = median(crest_values);
   EXPECT_GT(*std::min_element(crest_values.begin(), crest_values.end()), 0.5 * typical);
+}
+
+// On a coarse CAD tessellation every triangle spans a whole side of its flat face and touches
+// two creases, so no crease edge stands out from its faces' other edges; the flat facets on
+// either side say it is a crease all the same. Counts and signs are the solids' own.
+TEST(Curvature, CoarseCadTessellationsKeepTheirCreases) {
+  for (const int n : {1, 2}) {
+    const auto cube = prepare_mesh(testing::make_subdivided_cube(n));  // 12 triangles at n = 1
+    EXPECT_EQ(cube->curvature().crease_angle, 30) << "n = " << n;
+    EXPECT_EQ(cube->curvature().crease_edges, std::size_t(12 * n)) << "n = " << n;
+    const auto& crease = cube->curvature().crease;
+    EXPECT_EQ(std::count(crease.begin(), crease.end(), std::int8_t(1)), 24 * n) << "every crease convex, both ways";
+  }
+  // A chamfered cube (44 triangles): 24 edges between its squares and chamfers (45 degrees) and
+  // 24 round its 8 corner triangles (35 degrees), each corner a facet of one triangle.
+  const auto chamfered = prepare_mesh(read_mesh_file(testing::require_shared_mesh("chamfer-cube.off")));
+  EXPECT_EQ(chamfered->curvature().crease_angle, 30);
+  EXPECT_EQ(chamfered->curvature().crease_edges, 48u);
+}
+
+// The automatic crease angle is a dihedral angle. 4 x the median edge's angle reads the noise
+// on meshes whose median edge is nearly flat; a 12-triangle cube's median edge is one of its
+// 90-degree creases (it read 360), and with a third of its edges flat that is a crease's angle:
+// 30 degrees. A tetrahedron has no flat edge, and its 438 is capped at 179.
+TEST(Curvature, AutomaticCreaseAngleIsADihedralAngle) {
+  EXPECT_EQ(prepare_mesh(testing::make_subdivided_cube(1))->curvature().crease_angle, 30);
+  RawMesh tetrahedron;
+  tetrahedron.positions = {{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+  tetrahedron.triangles = {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
+  EXPECT_EQ(prepare_mesh(tetrahedron)->curvature().crease_angle, CurvatureLimits::max_crease_angle);
 }
 
 // Automatic: cubics at every radius; the field says which it fitted.

@@ -46,6 +46,36 @@ TEST(FeatureLine, ClosedLoopFollowsCircularCreaseBetweenVertices) {
   EXPECT_GT(result.initial.length, result.refined_length);  // the zig-zag edge path is longer
 }
 
+// A coarse CAD cube (each face 2 x 2 quads, 48 triangles) reads as the exact polyhedron it is:
+// a closed line through a face's four corners is that face's outline, kept as it is. Read as
+// noisy (fits across its creases made 0.41 edge lengths of "noise") the line was re-fitted as a
+// noisy crease and cut the corners across the face (length 6.5 instead of 8 on the 2 x 2 x 2
+// cube of cube.obj).
+TEST(FeatureLine, ACoarseCubesFaceOutlineIsKeptExactly) {
+  const auto mesh = prepare_mesh(make_subdivided_cube(2));
+  EXPECT_EQ(mesh->curvature().noise, 0);
+  auto vertex_at = [&](const Eigen::Vector3d& p) {
+    for (std::uint32_t v = 0; v < mesh->n_vertices(); ++v)
+      if ((mesh->positions()[v] - p).norm() < 1e-12) return v;
+    ADD_FAILURE() << "no vertex at " << p.transpose();
+    return std::uint32_t(0);
+  };
+  FeatureLineRequest request;
+  request.keys = {vertex_at({0, 0, 1}), vertex_at({1, 0, 1}), vertex_at({1, 1, 1}), vertex_at({0, 1, 1})};
+  request.closed = true;
+  const FeatureLineResult result = detect_feature_line(*mesh, request);
+  double length = 0;
+  for (std::size_t i = 0; i < result.refined.size(); ++i) {
+    const Eigen::Vector3d& p = result.refined[i].position;
+    EXPECT_NEAR(p.z(), 1, 1e-12);
+    EXPECT_TRUE(std::abs(p.x()) < 1e-12 || std::abs(p.x() - 1) < 1e-12 || std::abs(p.y()) < 1e-12 ||
+                std::abs(p.y() - 1) < 1e-12)
+        << "point " << i << " off the face's outline: " << p.transpose();
+    length += (result.refined[(i + 1) % result.refined.size()].position - p).norm();
+  }
+  EXPECT_NEAR(length, 4, 1e-12);
+}
+
 TEST(FeatureLine, FreeKeysLoopIsRefinedInTwoHalves) {
   const auto raw = make_cylinder(1.0, 2.0, 12, 48, true);
   const auto mesh = prepare_mesh(raw);
