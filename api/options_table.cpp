@@ -166,7 +166,7 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
       formerly({"max_line_edges"}, option<O>("initial.max_edges", {1, 1000}, "Lines longer than this many edges are "
                 "refused (split them): every stage's work grows with the length", "", &O::initial, &I::max_edges)),
       formerly({"rings"}, option<O>("strip.rings", within(StripOptions::rings_range), "Rings of faces around the "
-                "initial line in the feature strip (0: from the line's length, 2 to 8)", "--rings", &O::strip,
+                "initial line in the feature strip (0: 2 to 8, chosen from the line's length)", "--rings", &O::strip,
                 &StripOptions::rings)),
       formerly({"dense_line_edges"}, option<O>("strip.dense_line_edges", {1, 1000}, "Automatic rings: lines of this "
                 "many edges get 3 rings, twice as many 4, four times 6, eight times 8", "", &O::strip,

@@ -434,7 +434,7 @@ struct Program {
     add_inputs(*detect_command, in, true);
     add_line_flags(*detect_command, line);
     detect_command->add_option("--out", line.out_path, "Write the answer to FILE, in the format its ending names: .json, .glb or .gltf (lines and mesh), "
-                                ".obj (l polylines), .ply (edges), .polylines.txt (CGAL)")
+                                ".obj (l polylines), .ply (edges), .polylines.txt (CGAL), .csv (a row per point)")
         ->type_name("FILE");
     detect_command->callback([this] {
       run = [this] { return for_each_mesh(in, line.out_path, [this](const auto& mesh, double) { return detect(mesh, line); }); };
@@ -510,7 +510,14 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     const auto given = program.app.get_subcommands();
     const std::string help = given.empty() ? "featureline --help" : "featureline " + given[0]->get_name() + " --help";
-    std::cerr << "featureline: " << e.what() << "\nRun '" << help << "' for usage.\n";
+    std::string message = e.what();
+    // A first word that is no command reads as a missing one to the parser: name it.
+    if (given.empty() && argc > 1 && argv[1][0] != '-') {
+      message = "no command \"" + std::string(argv[1]) + "\"; the commands are";
+      for (const auto* command : program.app.get_subcommands([](CLI::App*) { return true; }))
+        message += " " + command->get_name();
+    }
+    std::cerr << "featureline: " << message << "\nRun '" << help << "' for usage.\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "featureline: " << e.what() << "\n";

@@ -30,6 +30,11 @@ check "--curvature-radius out of range is a usage error (exit 2)" [ $rc = 2 ]
 check "--curvature-radius out of range: the range, then a pointer to --help" \
   [ "$(cat "$tmp/err")" = "$(printf '%s\n%s' 'featureline: "--curvature-radius" must be a number from 0 to 12' "Run 'featureline info --help' for usage.")" ]
 
+"$FEATURELINE" detcet "$mesh" >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "a mistyped command is a usage error (exit 2)" [ $rc = 2 ]
+check "... naming it and the commands there are" \
+  [ "$(head -n 1 "$tmp/err")" = 'featureline: no command "detcet"; the commands are detect segment info features options' ]
+
 if [ -w /dev/full ]; then
   "$FEATURELINE" info "$mesh" >/dev/full 2>"$tmp/err"; rc=$?
   check "an answer standard output cannot take (a full disk) exits 1" [ $rc = 1 ]
