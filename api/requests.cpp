@@ -32,7 +32,16 @@ std::uint32_t parse_key(const json& k, const PreparedMesh& mesh, const std::stri
   const json& p = k["point"];
   const Eigen::Vector3d point(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
   if (!point.allFinite()) throw InvalidInputError(at + ".point must be finite");
-  return mesh.nearest_vertex(point);  // the prepared mesh's k-d tree (engine/vertex_index.h)
+  const std::uint32_t v = mesh.nearest_vertex(point);  // the prepared mesh's k-d tree (engine/vertex_index.h)
+  // A point further from the mesh than the mesh's own size was not picked on it (and one far
+  // enough out reads every vertex as equally near: its squared distances overflow).
+  const auto& s = mesh.statistics();
+  const double size = (Eigen::Vector3d(s.bbox_max[0], s.bbox_max[1], s.bbox_max[2]) -
+                       Eigen::Vector3d(s.bbox_min[0], s.bbox_min[1], s.bbox_min[2])).norm();
+  if (!((mesh.positions()[v] - point).norm() <= size))
+    throw InvalidInputError(at + ".point lies further from the mesh than the mesh's size (" + format_number(size) +
+                            ", its bounding box's diagonal): a point key is replaced by the vertex nearest to it");
+  return v;
 }
 
 }  // namespace

@@ -329,6 +329,14 @@ TEST(Requests, LineRequestsNameTheFieldInErrors) {
   EXPECT_EQ(error(R"({"keys": [1, 100000]})"), "request.keys[1] is vertex 100000, but the mesh has only " +
                                                     std::to_string(mesh->n_vertices()) + " vertices");
   EXPECT_EQ(error(R"({"lines": []})"), "\"lines\" must be an array of 1 to 64 line requests");
+  // A point key far off the mesh was not picked on it (far enough, every vertex reads as nearest).
+  const auto& stats = mesh->statistics();
+  const double size = std::hypot(stats.bbox_max[0] - stats.bbox_min[0], stats.bbox_max[1] - stats.bbox_min[1],
+                                 stats.bbox_max[2] - stats.bbox_min[2]);
+  for (const char* far : {R"({"keys": [3, {"point": [1e200, 1e200, 1e200]}]})", R"({"keys": [3, {"point": [0, 0, 50]}]})"})
+    EXPECT_EQ(error(far), "request.keys[1].point lies further from the mesh than the mesh's size (" + format_number(size) +
+                              ", its bounding box's diagonal): a point key is replaced by the vertex nearest to it")
+        << far;
   json many = {{"keys", json::array()}};
   for (std::size_t i = 0; i <= RequestLimits::max_keys_per_line; ++i) many["keys"].push_back(i % 2);
   EXPECT_EQ(error(many.dump()), "request.keys has more than " + std::to_string(RequestLimits::max_keys_per_line) + " keys");
