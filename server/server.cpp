@@ -253,6 +253,8 @@ struct FeaturelineServer::Impl {
       // The connection closes after this answer: say so, or a keep-alive client's next request fails.
       if (http.stopping() && res.get_header_value("Connection") != "close") res.set_header("Connection", "close");
       if (res.get_header_value("Connection") == "close") res.headers.erase("Keep-Alive");
+      // Answers are always whole (Range is ignored): advertise no byte ranges (httplib adds it to HEAD).
+      res.headers.erase("Accept-Ranges");
     });
     http.set_logger([this](const httplib::Request& req, const httplib::Response& res) {
       const bool routed = request_routed;

@@ -145,6 +145,21 @@ TEST(InProcessServer, AnUnservedMethodIs405NamingTheServedOnesInAllow) {
   EXPECT_EQ(r->status, 200);
 }
 
+TEST(InProcessServer, AnswersAdvertiseNoByteRangesSinceTheyAreAlwaysWhole) {
+  RunningServer server({});
+  auto client = server.client();
+  const std::string glb = "/v1/meshes/" + server.mesh_id() + "/mesh.glb";
+  auto head = client.Head(glb.c_str());
+  ASSERT_TRUE(head) << httplib::to_string(head.error());
+  EXPECT_EQ(head->status, 200);
+  EXPECT_FALSE(head->has_header("Accept-Ranges"));
+  auto ranged = client.Get(glb.c_str(), {{"Range", "bytes=0-9"}});
+  ASSERT_TRUE(ranged);
+  EXPECT_EQ(ranged->status, 200);
+  EXPECT_GT(ranged->body.size(), 10u);
+  EXPECT_FALSE(ranged->has_header("Accept-Ranges"));
+}
+
 TEST(InProcessServer, AnUnknownFormatIs415NamingEveryFormatTheReadersTake) {
   RunningServer server({});
   auto client = server.client();
