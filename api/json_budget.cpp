@@ -93,4 +93,10 @@ void check_json_shape(std::size_t text_bytes, const JsonShape& shape, const Json
                              " MiB, more than the " + std::to_string(allowed >> 20) + " MiB a body of its size may take");
 }
 
+std::string json_error_sentence(const nlohmann::json::exception& error) {
+  std::string what = error.what();
+  if (const auto end = what.find("] "); !what.empty() && what[0] == '[' && end != std::string::npos) what.erase(0, end + 2);
+  return what;
+}
+
 }  // namespace featureline

@@ -9,6 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <string>
+
 namespace featureline {
 
 /// What a DOM of a JSON text would hold.
@@ -44,5 +46,9 @@ nlohmann::json parse_json_within(std::string_view text, const JsonBudget& budget
 
 /// Checks a measured text (`text_bytes` long) against `budget`. \throw LimitExceededError as above
 void check_json_shape(std::size_t text_bytes, const JsonShape& shape, const JsonBudget& budget = {});
+
+/// What a JSON parse error says, without nlohmann's "[json.exception.parse_error.101] " prefix
+/// (a parse error, or a number too large for a double: out_of_range.406).
+std::string json_error_sentence(const nlohmann::json::exception& error);
 
 }  // namespace featureline

@@ -211,8 +211,8 @@ json read_request_file(const std::string& path) {
   }
   try {
     return featureline::parse_json_within(text);
-  } catch (const json::parse_error& e) {
-    throw InvalidInputError("the request is not valid JSON: " + std::string(e.what()));
+  } catch (const json::exception& e) {
+    throw InvalidInputError("the request is not valid JSON: " + featureline::json_error_sentence(e));
   }
 }
 
@@ -255,8 +255,8 @@ json flag_options(const LineFlags& f) {
   if (!f.options_text.empty()) {
     try {
       options = json::parse(f.options_text);
-    } catch (const json::parse_error& e) {
-      throw CLI::ValidationError(std::string("--options is not valid JSON: ") + e.what());
+    } catch (const json::exception& e) {
+      throw CLI::ValidationError("--options is not valid JSON: " + featureline::json_error_sentence(e));
     }
     if (!options.is_object()) throw CLI::ValidationError("--options must be a JSON object");
     options = line_options_current(options);

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <new>
 
+#include "api/json_budget.h"
 #include "engine/errors.h"
 #include "server/session_cache.h"
 #include "server/upload_store.h"
@@ -61,10 +62,7 @@ ErrorReply error_reply(std::exception_ptr error) {
   } catch (const CancelledError& e) {
     r = {503, "deadline_exceeded", e.what(), {{"Retry-After", "5"}}};
   } catch (const nlohmann::json::exception& e) {
-    // nlohmann prefixes its messages with "[json.exception.parse_error.101] "; keep the sentence.
-    std::string what = e.what();
-    if (const auto end = what.find("] "); !what.empty() && what[0] == '[' && end != std::string::npos) what.erase(0, end + 2);
-    r = {400, "invalid_json", "the request body is not valid JSON: " + what, {}};
+    r = {400, "invalid_json", "the request body is not valid JSON: " + json_error_sentence(e), {}};
   } catch (const std::bad_alloc&) {
     r = {413, "payload_too_large", "the request needs more memory than the server can give it", {}};
   } catch (...) {

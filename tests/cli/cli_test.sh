@@ -35,6 +35,11 @@ check "a mistyped command is a usage error (exit 2)" [ $rc = 2 ]
 check "... naming it and the commands there are" \
   [ "$(head -n 1 "$tmp/err")" = 'featureline: no command "detcet"; the commands are detect segment info features options' ]
 
+"$FEATURELINE" detect "$mesh" --keys 10,200 --options '{"snake": {"max_iterations": 1e400}}' >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "--options with a number no double holds is a usage error (exit 2)" [ $rc = 2 ]
+check "... said in a sentence, without the JSON library's code" \
+  [ "$(head -n 1 "$tmp/err")" = "featureline: --options is not valid JSON: number overflow parsing '1e400'" ]
+
 if [ -w /dev/full ]; then
   "$FEATURELINE" info "$mesh" >/dev/full 2>"$tmp/err"; rc=$?
   check "an answer standard output cannot take (a full disk) exits 1" [ $rc = 1 ]
