@@ -235,6 +235,23 @@ TEST(Trace, NoisyRidgesAndValleysStayOnTheCrest) {
   }
 }
 
+TEST(Trace, ASmoothFeatureGoesOnWhereCreasesNoiseMadeAlongItMeet) {
+  // At 20% noise the 80,000-triangle valley's crest has short runs of crease edges noise made;
+  // where three of them met, the trace stopped as at a junction of creases, which on a smooth
+  // feature is no choice the user has to make.
+  const HeightField field = make_ridge_field(201, 0.2, 7, -0.3, 0.25, 0.3);
+  const double fraction = 0.2 * field.spacing / mean_edge_length(field.mesh);
+  const auto mesh = prepare_mesh(with_noise(field.mesh, fraction, 1000003ull * 7 + 7));
+  const FeatureLineResult line = traced_line(*mesh, nearest_vertex(field.mesh, 0.0, field.crest(0.0)));
+  ASSERT_TRUE(line.trace);
+  for (const auto& end : line.trace->ends) {
+    EXPECT_EQ(end.reason, TraceStop::boundary);
+    EXPECT_NEAR(std::abs(mesh->positions()[end.vertex].x()), 1, 0.05);
+  }
+  const CrestDistance refined = crest_distance(field, refined_positions(line));
+  EXPECT_LT(refined.mean, 0.15 * mean_edge_length(field.mesh));
+}
+
 TEST(Trace, NothingToTraceOnASphereOrAPlane) {
   const auto sphere = prepare_mesh(make_icosphere(1, 4));
   EXPECT_THROW(trace_feature(*sphere, 17), GeometryError);
