@@ -510,11 +510,11 @@ struct FeaturelineServer::Impl {
   // answers the others.
   std::vector<std::pair<std::string, std::vector<std::string>>> route_methods;
 
-  const std::string& served(const char* method, const std::string& pattern) {
+  std::string served(const char* method, const std::string& pattern) {
     auto it = std::find_if(route_methods.begin(), route_methods.end(), [&](const auto& r) { return r.first == pattern; });
     if (it == route_methods.end()) it = route_methods.insert(route_methods.end(), {pattern, {}});
     it->second.push_back(method);
-    return it->first;
+    return pattern;
   }
 
   // A method a route does not serve is 405 with the methods it does in Allow (RFC 9110 15.5.6),
