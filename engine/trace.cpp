@@ -267,15 +267,15 @@ class Tracer {
     }
     std::uint32_t next = ahead.front();
     if (all.size() >= 3 && previous != kNoIndex) {
-      const std::optional<std::uint32_t> branch = junction_branch(walk, c, all.size(), ahead);
+      const std::optional<std::uint32_t> branch = junction_branch(walk, c, ahead);
       if (!branch && smooth_seed_) {
         // A smooth feature's trace that took creases noise made along it: where they meet, the
         // feature goes on, not a choice of creases (a 245,000-triangle ridge at 20% noise stopped
         // at such a junction at x = 0.74, its crest running from x = -1 to 1).
-        junctions_.pop_back();
         walk.on_crease = false;
         return {};
       }
+      junctions_.push_back({c, all.size(), branch.has_value()});
       if (!branch) return Step{{}, TraceStop::junction, false};
       next = *branch;
     }
@@ -284,9 +284,8 @@ class Tracer {
   }
 
   // The branch a junction continues along: the one turning least, when it turns at most
-  // max_turn and clearly less than the next; recorded either way.
-  std::optional<std::uint32_t> junction_branch(const Walk& walk, std::uint32_t c, std::size_t branches,
-                                               std::vector<std::uint32_t> ahead) {
+  // max_turn and clearly less than the next.
+  std::optional<std::uint32_t> junction_branch(const Walk& walk, std::uint32_t c, std::vector<std::uint32_t> ahead) const {
     std::sort(ahead.begin(), ahead.end(), [&](std::uint32_t a, std::uint32_t b) { return turn(walk, c, a) < turn(walk, c, b); });
     const double best = turn(walk, c, ahead[0]);
     // A rival branch within the margin that is itself a neighbour of the best one closes a
@@ -294,9 +293,7 @@ class Tracer {
     const bool clear = std::all_of(ahead.begin() + 1, ahead.end(), [&](std::uint32_t w) {
       return turn(walk, c, w) >= best + kJunctionMargin || mesh_.are_neighbors(ahead[0], w);
     });
-    const bool follow = options_.follow_junctions && best <= options_.max_turn * kPi / 180 && clear;
-    junctions_.push_back({c, branches, follow});
-    if (!follow) return std::nullopt;
+    if (!options_.follow_junctions || best > options_.max_turn * kPi / 180 || !clear) return std::nullopt;
     return ahead[0];
   }
 
