@@ -198,8 +198,8 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
       option<O>("crease_fit.curve_pull", {0, 1}, "Noisy crease runs: how far each point then moves toward the line's "
                 "fitted space curve before it is put back on the surface (0: the crease fit's points)", "", &O::crease_fit,
                 &CreaseFitOptions::curve_pull),
-      option<O>("crease_fit.min_crease_share", {0, 1}, "Noisy meshes: a piece with at least this share of crease "
-                "edges is fitted as a crease run", "", &O::crease_fit, &CreaseFitOptions::min_crease_share),
+      option<O>("crease_fit.min_crease_share", {0, 1}, "A piece with at least this share of crease edges is fitted "
+                "as a crease run (on a mesh that reads clean: when some are unmarked and its line runs on smoothly)", "", &O::crease_fit, &CreaseFitOptions::min_crease_share),
       option<O>("second_strip", {}, "A piece whose refined line reached its strip's outer rings is refined again on a strip "
                 "around the vertices nearest that line (the stronger line kept)", "--one-strip", &O::second_strip),
       option<O>("crest.enabled", {}, "Place the snake's line on the crest of the feature field across it, located "

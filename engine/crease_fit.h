@@ -51,7 +51,9 @@ struct CreaseFitOptions {
   /// short piece's edges can lose the mark). bench_accuracy, noisy CAD: 0.5 left 13 of 252 lines
   /// worse than their initial line (the snake refined weak creases in the noisy field), 0.25
   /// left 9 at the same 0.85 ratio; 0.1 and 0 gave back accuracy (0.86, 0.90). Smooth fields
-  /// are unchanged (their pieces have no crease edges of the line's sign).
+  /// are unchanged (their pieces have no crease edges of the line's sign). On a mesh that reads
+  /// clean only a piece with unmarked edges whose line runs on smoothly (no turn over 45 degrees,
+  /// unlike a bend that crosses faces) is fitted; one of crease edges only is kept exactly.
   double min_crease_share = 0.25;
   /// How far each interior point of a noisy crease run then moves toward the line's fitted space
   /// curve (engine/fitted_curve.h: crease points where two planes fit the sides, averaged along

@@ -47,7 +47,9 @@ struct FeatureLineOptions {
   /// trusted to lie on the true crease and crease runs are refined by the snake.
   double exact_crease_noise = kNoisyCreaseNoise;
   /// Crease runs on meshes noisier than that are re-fitted along the chain and put back on the
-  /// surface (engine/crease_fit.h); bandwidth 0 hands them to the snake like any other piece.
+  /// surface (engine/crease_fit.h), and so are runs with unmarked edges on meshes that read clean
+  /// (noise unmarks a few crease edges long before the estimate reaches exact_crease_noise);
+  /// bandwidth 0 hands them to the snake like any other piece.
   CreaseFitOptions crease_fit;
   /// Never worse: a refined piece whose mean feature strength along it falls below this share
   /// of its initial line's is replaced by the initial line (and reported in `pieces`).

@@ -289,6 +289,40 @@ TEST(Accuracy, NoisyRealCadCreasesAreRefittedCloserToTheTrueCrease) {
   EXPECT_LE(worse, 1);
 }
 
+TEST(Accuracy, LightlyNoisyCreasesWithUnmarkedEdgesAreFittedNotSnaked) {
+  // At 2-5% noise the mesh still reads clean (under exact_crease_noise) but the noise unmarks a
+  // few edges of the wing nut's and fandisk's creases; the snake took such pieces off their
+  // creases (bench_accuracy at 2%: 16 of 189 lines worse than their initial line, the wing nut's
+  // 0.030 -> 0.045). Re-fitted as crease runs, the lines keep to their creases.
+  int worse = 0, fitted = 0;
+  double initial_sum = 0, refined_sum = 0;
+  for (const char* name : {"wingnut.obj", "fandisk.off"}) {
+    const std::string path = require_shared_mesh(name);
+    if (path.empty()) return;
+    const RawMesh raw = read_mesh_file(path);
+    const auto chains = find_crease_chains(raw, 30, 10);
+    for (const double noise : {0.02, 0.05}) {
+      const auto mesh = prepare_mesh(with_noise(raw, noise, 7));
+      ASSERT_LT(mesh->statistics().noise, FeatureLineOptions{}.exact_crease_noise) << name << " reads clean at " << noise;
+      for (const auto& chain : chains) {
+        const auto truth = positions_of(raw, chain.vertices);
+        const auto result = detect_feature_line(*mesh, chain_request(chain));
+        for (const auto& piece : result.piece_reports) fitted += piece.kept == PieceKept::crease_fit;
+        const double unit = mean_edge_length(raw);
+        const double initial = mean_distance_to_polyline(result.initial_points, truth, chain.closed) / unit;
+        const double refined = mean_distance_to_polyline(refined_positions(result), truth, chain.closed) / unit;
+        initial_sum += initial, refined_sum += refined;
+        worse += refined > initial + 0.002;
+      }
+    }
+  }
+  // Measured: 62 lines, 1 worse, 5 pieces fitted, summed 1.695 against 1.742 initially (snaked:
+  // 4 worse, none fitted, 1.784).
+  EXPECT_GT(fitted, 0);
+  EXPECT_LE(worse, 1);
+  EXPECT_LT(refined_sum, initial_sum);
+}
+
 TEST(Accuracy, KeysOnANoisyCreaseRunAreFittedWithItUnlessKeptInPlace) {
   // The fandisk's chains at 10% noise again: a line whose pieces are all crease runs is fitted as
   // one run, its keys noisy vertices like the rest (crest.move_keys), so the line passes beside
