@@ -247,8 +247,8 @@ const OptionTable<FeatureLineOptions>& feature_line_option_table() {
       option<O>("crest.follow_bend", {}, "Crest localisation: fits measure across the line from its bend, so a bent "
                 "crest is not read as an offset into the bend (false: from its tangent)", "", &O::crest, &CrestOptions::follow_bend),
       option<O>("crest.unblur", {}, "Crest localisation: each point moves out of the line's bend by three quarters of "
-                "what the field's blur (jets, smoothing) moved the crest into it, on meshes with estimated noise "
-                "0.03-0.09 where the blur is narrow against the crest (false: the field's crest)", "", &O::crest,
+                "what the field's blur (jets, smoothing) moved the crest into it, where the field was smoothed (estimated "
+                "noise 0.005-0.09) and the blur is narrow against the crest (false: the field's crest)", "", &O::crest,
                 &CrestOptions::unblur),
       option<O>("trace.sign", {}, "A line traced from one key follows: a crease's sign near the key, else the larger "
                 "curvature's (auto), or ridges or valleys only", "--trace-sign", &O::trace, &TraceOptions::sign),

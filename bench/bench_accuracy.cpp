@@ -626,14 +626,14 @@ void add_curved_cases(const BenchArgs& a, std::vector<Case>& cases) {
   const std::vector<int> sizes = !a.only_sizes.empty() ? a.only_sizes : a.quick ? std::vector<int>{51, 111} : std::vector<int>{51, 111, 201, 351};
   for (CrestCurve curve : {CrestCurve::arc, CrestCurve::sine})
     for (bool ridge : {true, false})
-      for (int n : sizes) cases.push_back(curved_case(curve, ridge, n, {0, 10, 20, 30}));
+      for (int n : sizes) cases.push_back(curved_case(curve, ridge, n, {0, 2, 5, 10, 20, 30}));
 }
 
 // Ridge and valley fields, slabs, real CAD meshes; false (after saying which) when a mesh is missing.
 bool build_cases(const BenchArgs& a, const std::vector<int>& sizes, std::vector<Case>& cases) {
   for (bool ridge : {true, false})
     for (int n : sizes)
-      if (!a.cad_only && !a.curved_only) cases.push_back(ridge_case(ridge, n, {0, 10, 20, 30}));
+      if (!a.cad_only && !a.curved_only) cases.push_back(ridge_case(ridge, n, {0, 2, 5, 10, 20, 30}));
   if (!a.cad_only && !a.no_curved) add_curved_cases(a, cases);
   for (auto t : {SlabTessellation::skinny, SlabTessellation::fine})
     for (bool loop : {false, true})

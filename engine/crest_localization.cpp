@@ -135,10 +135,13 @@ constexpr double kBendFrameMaxNoise = 0.09;
 // kBendFrameMaxNoise and above: at 30% such fits moved cells both ways (0.146 -> 0.095, 0.116 ->
 // 0.142).
 constexpr double kNarrowestStripFit = 3;
-// ... on meshes at least this noisy (estimated, local edge lengths): the fields it was measured on
-// (10-20% noise reads 0.037-0.074). Below it a mesh counts as clean for the fits here: symmetric
-// windows (symmetric_reach) apply below it, crest.unblur from it. On cleaner scans it bought little for its cost: on the bunny
-// (0.021) along-feature lines took 12-28% longer (bench_pipeline) for 0.03% more mean strength.
+// ... on meshes at least this noisy (estimated, local edge lengths: the fields it was measured on
+// at 10-20% noise read 0.037-0.074). Below it a mesh counts as clean for the fits here: symmetric
+// windows (symmetric_reach) apply below it. On cleaner scans the narrow strips' fits cost more
+// than they bring: on the bunny (0.021) lines took 45% longer along features and 25% with keys
+// anywhere (bench_pipeline medians 0.55 -> 0.80 and 1.58 -> 1.96 ms) from 0.015, though the
+// 5,000-triangle fields at 5% noise (0.018-0.020), left to the snake, lie inside their bends
+// (arcs 0.107 / 0.113 grid spacings, 0.039 / 0.028 fitted across).
 constexpr double kNarrowStripMinNoise = 0.03;
 
 // A crest is where the field falls off across the line by at least this share of its peak
@@ -282,11 +285,14 @@ double field_blur_variance(const CurvatureField& field, double h, double h2) {
   return kJetBlur * field.radius * field.radius * h * h + 0.25 * field.smoothing_passes * h2;
 }
 
-// The blur is taken out (CrestOptions::unblur) on meshes whose estimated noise (local edge
-// lengths) lies from kNarrowStripMinNoise to kBendFrameMaxNoise: smoothed fields of noisy meshes,
-// where the blur is several edges wide (bench_accuracy's fields at 10% noise read 0.036-0.037, at
-// 20% 0.071-0.074). On clean meshes the blur is the radius-2 jets' (sigma about 0.66 edges, a
-// shift under 0.02 edges in these bends). Below this noise the bend is the line's over three fit
+// The blur is taken out (CrestOptions::unblur) where the field was smoothed (from 0.005 noise,
+// kExactSurfaceNoise in engine/curvature.cpp) on meshes whose estimated noise (local edge lengths)
+// lies under kBendFrameMaxNoise: there the blur is several edges wide (bench_accuracy's fields at
+// 10% noise read 0.036-0.037, at 20% 0.071-0.074). On clean meshes the blur is the radius-2 jets'
+// (sigma about 0.66 edges, a shift under 0.02 edges in these bends). Taken out only from 0.03,
+// lightly noisy fields (2-5%, 0.007-0.020) lay inside their bends: the 80,000-triangle arcs at 2%
+// 0.060 / 0.067 grid spacings (+0.058 / +0.061 inward), more than at 10%; now 0.036 / 0.037.
+// Below kUnblurMaxNoise the bend is the line's over three fit
 // radii (the bent frame's); from it, the snake's line wanders with the noisy field's crest and
 // its bend over three radii follows the wander as much as the crest (the correction moved 20%
 // cells both ways: 24,200-triangle sine ridge 0.098 -> 0.138 grid spacings), so the bend is read
@@ -412,7 +418,7 @@ CrestResult localize_crest(const PreparedMesh& mesh, const FeatureStrip& strip, 
     if (end) moves[i == 0 ? 0 : 1] = std::abs(s) <= reach;
   }
   std::vector<double> smoothed = smooth_offsets(offsets, o.smoothing_passes);
-  if (o.unblur && noise >= kNarrowStripMinNoise && noise < kBendFrameMaxNoise) {
+  if (o.unblur && mesh.curvature().smoothing_passes > 0 && noise < kBendFrameMaxNoise) {
     const double variance = field_blur_variance(mesh.curvature(), h, strip.mean_squared_edge_length);
     const double sigma = std::sqrt(variance);
     const bool wandering = noise >= kUnblurMaxNoise;

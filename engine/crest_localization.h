@@ -50,8 +50,8 @@ struct CrestOptions {
   /// Takes the field's blur out of bends. The jets and smoothing passes that make the field blur
   /// it, which moves the crest of a bent feature into its bend by sigma^2 / (2 R) to first order
   /// (sigma^2: the blur's variance per axis, R: the bend's radius); each point then moves three
-  /// quarters of that out of the line's bend, on meshes whose estimated noise is 0.03-0.09 local
-  /// edge lengths, where the bend is gentle against the blur (sigma / R at most 0.1) and the blur
+  /// quarters of that out of the line's bend, on meshes whose field was smoothed (estimated noise
+  /// 0.005 and more) and whose noise is under 0.09 local edge lengths, where the bend is gentle against the blur (sigma / R at most 0.1) and the blur
   /// narrow against the crest (sigma at most 0.75 of the fitted profile's half width), where the
   /// first-order shift holds (accuracy.md). From a noise of 0.05 the bend is the localised line's
   /// over ten fit radii (the snake's line wanders with the noisy field's crest).
