@@ -129,6 +129,22 @@ void warn_dropped_faces(PreparedTables& pm, std::size_t first_dropped, std::size
   }
 }
 
+// A vertex where fans of triangles meet only at it (two cones tip to tip, a lid touching its pot
+// at a point) takes every face at once when each fan has a free border there, so no face is
+// split off: say so rather than leave it to the non-manifold count. Only read on meshes whose
+// soup has such vertices.
+void warn_pinched_vertices(const TriMesh& mesh, PreparedTables& pm) {
+  std::size_t pinched = 0;
+  int first = -1;
+  for (const auto v : mesh.vertices())
+    if (!mesh.is_manifold(v) && pinched++ == 0) first = v.idx();
+  if (pinched == 0) return;
+  std::ostringstream msg;
+  msg << pinched << " vertex(es) join fans of triangles that meet only there (first: vertex " << first
+      << "); each is kept as one vertex, so a line through it may pass from one fan to another";
+  pm.warnings.push_back(msg.str());
+}
+
 // Adds the soup's triangles to `mesh` and pm.triangles in input order. OpenMesh refuses faces
 // that would make an edge or vertex non-manifold (its error stream is switched off in
 // prepare_mesh); like OpenMesh's own reader, we give such a face its own copies of the vertices
@@ -430,6 +446,7 @@ std::shared_ptr<const PreparedMesh> prepare_mesh(RawMesh raw, const PrepareOptio
     stats.non_manifold_edges = counted.non_manifold_edges;
     stats.non_manifold_vertices = counted.non_manifold_vertices;
   }
+  if (stats.non_manifold_vertices > 0) warn_pinched_vertices(*mesh_ptr, pm);
   if (mesh_ptr->n_faces() == 0) throw GeometryError("the mesh has no usable triangle");
 
   const TriMesh& mesh = *mesh_ptr;

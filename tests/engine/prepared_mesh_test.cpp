@@ -81,6 +81,31 @@ TEST(PreparedMesh, NonManifoldInputGetsSeparateFacesInTheTables) {
   EXPECT_EQ(pm->nearest_vertex(Eigen::Vector3d(0, 0, 2)), 7u);
 }
 
+TEST(PreparedMesh, FansMeetingOnlyAtAVertexAreKeptAndReported) {
+  // Two triangles tip to tip at vertex 0 (a bowtie): each fan has a free border there, so both
+  // are taken as they are and vertex 0 stays one vertex of two fans; a warning names it. The
+  // edge-sharing case above is split, and no such warning comes with it.
+  RawMesh bowtie;
+  bowtie.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}};
+  bowtie.triangles = {{0, 1, 2}, {0, 3, 4}};
+  bowtie.source_faces = 2;
+  const auto pm = prepare_mesh(bowtie);
+  EXPECT_EQ(pm->n_vertices(), 5u);
+  EXPECT_EQ(pm->statistics().non_manifold_vertices, 1u);
+  EXPECT_EQ(pm->statistics().duplicated_vertices, 0u);
+  ASSERT_EQ(pm->warnings().size(), 1u);
+  EXPECT_NE(pm->warnings()[0].find("1 vertex(es) join fans of triangles that meet only there (first: vertex 0)"),
+            std::string::npos)
+      << pm->warnings()[0];
+
+  RawMesh split;
+  split.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
+  split.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+  split.source_faces = 3;
+  const auto split_pm = prepare_mesh(split);
+  for (const auto& warning : split_pm->warnings()) EXPECT_EQ(warning.find("join fans"), std::string::npos);
+}
+
 TEST(PreparedMesh, NearestVertexIsTheGridPointNearest) {
   // A regular 11 x 11 grid over [-1, 1]^2 (spacing 0.2): the point just off grid point (i, j)
   // is nearest vertex j * 11 + i.
