@@ -17,6 +17,12 @@ for f in bin/featureline bin/featureline-server share/man/man1/featureline.1 sha
   check "installed $f" [ -s "$TMP/prefix/$f" ]
 done
 check "the man page is generated from --help" grep -q 'detect' "$TMP/prefix/share/man/man1/featureline.1"
+check "... and lists the commands' pages" grep -q 'featureline-detect' "$TMP/prefix/share/man/man1/featureline.1"
+for command in detect segment info features options; do
+  page="$TMP/prefix/share/man/man1/featureline-$command.1"
+  check "installed featureline-$command.1, titled by the command" grep -q "^\.TH FEATURELINE-${command^^} " "$page"
+done
+check "featureline-detect.1 is detect's own --help" grep -q 'keys' "$TMP/prefix/share/man/man1/featureline-detect.1"
 check_eq "the installed CLI's --version" "$("$TMP/prefix/bin/featureline" --version)" "featureline $version"
 
 # The installed server alone (run from an empty folder) serves its page.
