@@ -182,6 +182,8 @@ featureline::MeshFile read_input_mesh(const std::string& path, const Inputs& in)
     file = featureline::read_mesh_file_bytes(path, in.limits);
   } else {
     file.bytes = read_stream(std::cin, in.limits.max_file_bytes, "standard input");
+    // Nothing to sniff is no format question: say what is wrong, as for an empty file.
+    if (file.bytes.empty()) throw featureline::MeshFormatError("standard input is empty.");
     if (!format) format = featureline::sniff_mesh_format(file.bytes);
     if (!format) throw CLI::ValidationError("cannot tell the format of standard input: pass --format");
   }

@@ -180,6 +180,8 @@ check "no command: exit 2" [ $rc = 2 ] && check "no command: two lines on stderr
 check "info - reads standard input" [ $rc = 0 ] && check "info - counts fandisk's vertices" [ "$(jq .vertices "$tmp/stdin.json")" = 6475 ]
 "$FEATURELINE" info - --format ply <"$mesh" >"$tmp/out" 2>"$tmp/err"; rc=$?
 check "--format ply on an OFF file is refused (exit 1)" [ $rc = 1 ]
+"$FEATURELINE" info - </dev/null >"$tmp/out" 2>"$tmp/err"; rc=$?
+check "empty standard input: exit 1" [ $rc = 1 ] && check "... saying it is empty" grep -q '^featureline: standard input is empty.$' "$tmp/err"
 p10=$(jq -c '.initial.points[0]|map(tostring)|join(",")' -r "$tmp/line.json")
 p400=$(jq -c '.initial.points[-1]|map(tostring)|join(",")' -r "$tmp/line.json")
 "$FEATURELINE" detect "$mesh" --points "$p10;$p400" >"$tmp/points.json"; rc=$?
